@@ -1,0 +1,31 @@
+#pragma once
+// Loading, validating and writing case files (TOML). The ONLY place that knows TOML.
+//
+// Every problem in a case is collected and reported at once in a CaseError: each issue names the
+// file, line, key (section.key), value and the rule it breaks. Unknown sections and keys are
+// errors (a typo is never silently ignored); so are missing required keys, wrong types and
+// non-finite numbers. Overrides "section.key=value" (CLI --set) are applied on top of the file and
+// validated the same way (their issues name "--set" as the file).
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "rubdyn/io/case_spec.hpp"
+
+namespace rubdyn {
+
+/// Reads, overrides, validates. Throws CaseError (every problem listed) on bad input.
+CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides = {});
+
+/// Same, from TOML text; `source` is the name used in messages (tests, stdin).
+CaseSpec parse_case(std::string_view toml_text, const std::string& source,
+                    const std::vector<std::string>& overrides = {});
+
+/// The case as TOML with every default and override filled in (case.resolved.toml). Reading it
+/// back with parse_case gives the same CaseSpec (numbers are written with 17 significant digits).
+std::string to_toml(const CaseSpec& c);
+
+/// The output folder of a case: output.folder if set, else "out/<name>".
+std::string output_folder(const CaseSpec& c);
+
+}  // namespace rubdyn

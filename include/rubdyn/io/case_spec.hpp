@@ -1,0 +1,58 @@
+#pragma once
+// CaseSpec: the one parsed, validated form of a case file (TOML). Only io/ knows TOML; the model
+// gets RotorStatorParams, solvers get options structs. Every key, unit and admissible range is
+// documented in cases/README.md.
+#include <string>
+#include <vector>
+
+#include "rubdyn/core/types.hpp"
+#include "rubdyn/model/rotor_stator_params.hpp"
+
+namespace rubdyn {
+
+/// [initial]: every position and velocity (default 0), spin speed omega0.
+struct InitialState {
+  Vec7 q0 = Vec7::Zero();  ///< keys x_b, y_b, x_r, y_r, theta, x_s, y_s
+  Vec7 v0 = Vec7::Zero();  ///< keys vx_b, vy_b, vx_r, vy_r, omega0, vx_s, vy_s
+};
+
+/// [run]
+struct RunOptions {
+  double t_end = 0.5;        ///< [s]
+  double omega_lim = 2110.0; ///< speed limit used by the analysis [rad/s]
+};
+
+/// [solver]
+struct SolverOptions {
+  std::string kind = "event";   ///< event | carp-onevc | carp-qn | mj | mj-proj
+  // event-driven
+  double rtol = 1e-10;          ///< relative tolerance
+  double atol = 1e-12;          ///< absolute tolerance, scaled per component by the solver
+  std::string method = "bdf";   ///< bdf | adams (CVODE linear multistep family)
+  double max_events_per_second = 1e6;  ///< chattering guard: events per simulated second
+  // fixed-step
+  double h = 1e-6;              ///< time step [s]
+  int itmax = 20;               ///< carp-qn: max quasi-Newton iterations per step
+  double qn_tol = 1e-12;        ///< carp-qn: relative tolerance on the step increment
+  double theta = 0.5;           ///< Moreau-Jean theta (gamma in the paper), in [0.5, 1]
+  double eta = 0.5;             ///< Moreau-Jean mass-matrix weight, in [0, 1]
+};
+
+/// [output]
+struct OutputOptions {
+  double dt = 1e-4;        ///< output interval [s] (dense output, never changes the steps taken)
+  int every = 0;           ///< fixed-step schemes: write every N-th step (0: use dt)
+  std::string folder;      ///< output folder (empty: out/<case name>)
+};
+
+struct CaseSpec {
+  std::string name;         ///< case name (file stem unless given)
+  std::string source;       ///< path of the case file (for messages)
+  RotorStatorParams params;
+  InitialState initial;
+  RunOptions run;
+  SolverOptions solver;
+  OutputOptions output;
+};
+
+}  // namespace rubdyn

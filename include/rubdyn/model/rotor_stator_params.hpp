@@ -1,0 +1,44 @@
+#pragma once
+// Physical parameters of the rotor-stator model (paper, section 3), SI units. A plain struct;
+// validation of user input lives in io/ (case files), which names file, line, key and rule.
+#include "rubdyn/contact/contact_law.hpp"
+
+namespace rubdyn {
+
+struct RotorParams {
+  double mass = 5.0;     ///< m [kg]
+  double Jd = 0.035;     ///< diametral moment of inertia about G [kg m^2]
+  double Jp = 0.06;      ///< polar moment of inertia [kg m^2]
+  double L = 0.5;        ///< shaft length, bearing B to free end [m]
+  double delta = 0.1;    ///< distance from the free end to the contact plane R [m]
+  double d = 0.3;        ///< distance from the bearing B to the centre of mass G [m]
+  double radius = 0.05;  ///< seal ring (rotor) radius R_r [m]
+};
+
+struct BearingParams {
+  double k = 5.0e6;  ///< k_b [N/m]
+  double c = 300.0;  ///< c_b [N s/m]
+};
+
+struct StatorParams {
+  double mass = 2.0;   ///< m_s [kg]
+  double k = 2.0e6;    ///< k_s [N/m]
+  double c = 100.0;    ///< c_s [N s/m]
+  double gap = 2.0e-4; ///< g0 = R_s - R_r [m]
+};
+
+struct LoadParams {
+  double gravity = 9.81;  ///< g [m/s^2], along -Y
+  double torque = 20.0;   ///< driving torque tau_a [N m]
+};
+
+/// Defaults are the reference case of shared/spec/reference-case.toml.
+struct RotorStatorParams {
+  RotorParams rotor;
+  BearingParams bearing;
+  StatorParams stator;
+  ContactLaw contact{0.1, 0.0, 0.0};
+  LoadParams loads;
+};
+
+}  // namespace rubdyn

@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Installs every dependency of rubdyn from Debian 12 packages. Idempotent: when everything is
+# present it does nothing (no apt-get update, no network). Run as root (or with sudo).
+set -euo pipefail
+
+# Build and test dependencies (libraries, compiler, build tools) and the figure/validation stack.
+packages=(
+  g++ cmake make git
+  libsundials-dev      # SUNDIALS 6.4.1: CVODE, IDA, dense linear algebra
+  libeigen3-dev        # fixed-size linear algebra for the 7-dof model
+  libfmt-dev           # formatting
+  catch2               # Catch2 v2.13 (tests)
+  libtomlplusplus-dev  # TOML parser: line+column of every node and of parse errors; compiled library
+  libcli11-dev         # command line
+  libbenchmark-dev     # Google Benchmark (bench/)
+  python3-matplotlib python3-numpy python3-scipy   # figures and studies in validation/
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -1,0 +1,30 @@
+// rubdyn: command-line entry point. Nothing but dispatch and the mapping of errors to exit codes.
+#include <cstdio>
+#include <exception>
+
+#include "commands.hpp"
+#include "rubdyn/io/case_error.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"rubdyn: reference solutions for rotor-stator rub with Coulomb friction"};
+  app.require_subcommand(1);
+  rubdyn::app::Action action;
+  rubdyn::app::add_check_command(app, action);
+  rubdyn::app::add_campbell_command(app, action);
+  rubdyn::app::add_run_command(app, action);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int rc = app.exit(e);  // prints help (rc 0) or the usage error
+    return rc == 0 ? 0 : 2;
+  }
+  try {
+    return action ? action() : 2;
+  } catch (const rubdyn::CaseError& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "rubdyn: error: %s\n", e.what());
+    return 2;
+  }
+}
