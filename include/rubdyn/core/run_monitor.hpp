@@ -36,11 +36,11 @@ class RunMonitor {
     omega_prev_ = omega;
     if (in_contact) {
       min_FN_ = std::isnan(min_FN_) ? F_N : std::min(min_FN_, F_N);
-      const double cap = mu_ * std::max(F_N, 0.0);
-      const double excess = std::abs(F_T) - cap;
-      if (excess > 0.0) {
-        max_cone_ = std::max(max_cone_, excess / std::max(cap, std::numeric_limits<double>::min()));
-      }
+      // Cone violation relative to the largest contact force of the run so far: at a lift-off
+      // or a stick-to-slip switch F_N and F_T are both ~0 and a ratio to mu F_N is meaningless.
+      F_scale_ = std::max({F_scale_, std::abs(F_N), std::abs(F_T)});
+      const double excess = std::abs(F_T) - mu_ * std::max(F_N, 0.0);
+      if (excess > 0.0 && F_scale_ > 0.0) max_cone_ = std::max(max_cone_, excess / F_scale_);
       max_drift_q_ = std::max(max_drift_q_, std::abs(d_N));
       max_drift_v_ = std::max(max_drift_v_, std::abs(v_N));
     }
@@ -64,6 +64,7 @@ class RunMonitor {
  private:
   double mu_, omega_lim_;
   bool first_ = true;
+  double F_scale_ = 0.0;
   double max_pen_ = 0.0, max_cone_ = 0.0, max_drift_q_ = 0.0, max_drift_v_ = 0.0;
   double min_FN_ = std::numeric_limits<double>::quiet_NaN();
   double omega_max_ = 0.0, omega_final_ = 0.0, t_prev_ = 0.0, omega_prev_ = 0.0;

@@ -83,12 +83,13 @@ struct RunSummary {
   double t_start = 0.0, t_end_requested = 0.0, t_reached = 0.0;
   double wall_seconds = 0.0;
   long steps = 0, rhs_evals = 0, jac_evals = 0, root_evals = 0, newton_iters = 0;
+  long suppressed_witnesses = 0;  ///< witness roots ignored at the very start of a phase
   std::array<long, kNumEventKinds> events{};
   std::array<double, kNumPhases> phase_time{};  ///< simulated seconds spent in each phase
   // invariants
   double max_penetration = 0.0;        ///< max(-d_N, 0) over samples and step ends [m]
   double min_F_N_in_contact = std::numeric_limits<double>::quiet_NaN();
-  double max_cone_violation = 0.0;     ///< max(|F_T| - mu F_N, 0) / max(mu F_N, tiny) [-]
+  double max_cone_violation = 0.0;     ///< max(|F_T| - mu F_N, 0) / (largest contact force) [-]
   double max_drift_position = 0.0;     ///< max |d_N| in persistent contact [m]
   double max_drift_velocity = 0.0;     ///< max |v_N| in persistent contact [m/s]
   // energy balance: E(t) - E(0) = W_torque + W_damping + W_friction + W_impacts (+ residual)

@@ -1,0 +1,72 @@
+#pragma once
+// The single-contact problem at acceleration and impulse level, shared by the event-driven
+// integrator (mode selection at events, contact-phase dynamics, impact map).
+//
+// Phase dynamics at (t, q, v), with W = [W_N W_T], A = W^T M^{-1} W (2x2 Delassus matrix),
+// b = W^T M^{-1} f + (wdot_N, wdot_T):
+//   free:    a = M^{-1} f,                     F_N = F_T = 0
+//   slip s:  F_T = -mu s F_N,  C = W_N - mu s W_T,  d_N'' = 0:
+//            F_N = -b_N / (A_NN - mu s A_NT),  a = M^{-1}(f + C F_N)
+//   stick:   d_N'' = 0 and v_t' = 0:  (F_N, F_T) = -A^{-1} b,  a = M^{-1}(f + W (F_N, F_T))
+// Painleve: the slip normal "mass" A_NN - mu s A_NT <= 0 makes the slip problem ill-posed
+// (no solution, or several): detected and reported, never silently picked.
+//
+// Impact map (v_N- < 0): Newton's law v_N+ = -e_n v_N- with a Coulomb frictional impulse:
+// first the sticking impulse (v_t+ = -e_t v_t-); if it leaves the cone, the sliding impulse
+// P_T = sigma mu P_N in the direction sigma the sticking impulse wanted. Exact for one contact.
+#include <string>
+
+#include "rubdyn/core/run_types.hpp"
+#include "rubdyn/model/lagrangian_model.hpp"
+
+namespace rubdyn {
+
+/// M^{-1} applied to f, W_N and W_T, and the quantities every phase needs; computed once per
+/// evaluation (one LDLT of the 7x7 mass matrix, no allocation).
+struct ContactOperators {
+  ContactKinematics c;
+  Vec7 Minv_f, Minv_WN, Minv_WT;
+  double A_NN = 0, A_NT = 0, A_TT = 0;  ///< Delassus matrix entries
+  double b_N = 0, b_T = 0;              ///< free normal/tangential accelerations d_N'', v_t'
+};
+void compute_contact_operators(const LagrangianModel& m, double t, const Vec7& q, const Vec7& v,
+                               ContactOperators& op);
+
+struct PhaseDynamics {
+  Vec7 a = Vec7::Zero();
+  double F_N = 0.0, F_T = 0.0;
+  double normal_mass = 0.0;  ///< slip: A_NN - mu s A_NT; stick: det(A) / A_TT; free: A_NN
+  bool well_posed = true;    ///< false for a Painleve slip (normal_mass <= 0) or singular stick
+};
+/// Acceleration and contact forces in `phase`.
+PhaseDynamics phase_dynamics(const ContactOperators& op, Phase phase, double mu);
+
+/// Result of the mode selection at an event on the constraint (d_N = 0, v_N = 0).
+struct ModeDecision {
+  Phase phase = Phase::Free;
+  PhaseDynamics dyn;
+  int n_consistent = 0;  ///< 1 in a well-posed situation
+  bool painleve = false; ///< no candidate (inconsistent) or several (non-unique)
+  std::string note;      ///< what was decided and why (logged with the event)
+};
+/// Enumerates the candidates {free, slip+, slip-, stick} (only the sliding direction when
+/// |v_t| > v_t_eps; no stick and no slip direction when mu = 0) and keeps the consistent one;
+/// rel_tol is the relative band within which a margin counts as zero (the accuracy of the
+/// event location). The rules for ties and for no candidate are stated in the implementation.
+ModeDecision select_mode(const ContactOperators& op, double mu, double v_t_eps,
+                         double rel_tol = 1e-9);
+
+struct ImpactResult {
+  Vec7 v_plus = Vec7::Zero();
+  double P_N = 0.0, P_T = 0.0;
+  bool sticking = false;  ///< the impulse stayed inside the cone
+  bool ok = true;         ///< false: ill-posed (normal impact mass <= 0)
+};
+/// Impact map at (q, v-) with the contact law of the model. Requires op computed at (q, v-).
+ImpactResult impact_map(const ContactOperators& op, const Vec7& v_minus, const ContactLaw& law);
+
+/// Mass-weighted projection of v onto {v_N = 0} (n_constraints = 1) or {v_N = 0, v_t = 0}
+/// (n_constraints = 2): v <- v - M^{-1} W (W^T M^{-1} W)^{-1} W^T v (W^T v = 0 exactly after).
+void project_velocity(const ContactOperators& op, int n_constraints, Vec7& v);
+
+}  // namespace rubdyn

@@ -1,0 +1,47 @@
+#pragma once
+// The event-driven hybrid integrator: reference solutions computed event by event.
+//
+// A run is a sequence of phases (free, slip+, slip-, stick). Each phase is a smooth ODE
+// integrated by CVODE with error control and root finding on the witnesses that end it:
+//   free:    d_N / g0 (closing: contact onset), v_N / v_ref (rising: a gap minimum, for grazing)
+//   slip s:  F_N / F_ref (falling: lift-off), v_t / v_ref (towards 0: stick or reversal;
+//            not built when mu = 0)
+//   stick:   F_N / F_ref (lift-off), (mu F_N -+ F_T) / F_ref (falling: stick -> slip)
+//   all:     (omega - omega_lim) / omega_lim (rising: the crossing time, no event)
+// Contact phases are the index-reduced DAE (acceleration-level constraint, contact_problem.hpp)
+// integrated by CVODE-BDF with projection after every step: positions onto d_N = 0, velocities
+// onto v_N = 0 (and v_t = 0 in stick), both mass-weighted; the drift is measured and reported.
+// At an event: contact onset with v_N < 0 -> impact map (Newton + Coulomb impulse); any other
+// switch -> the contact problem at acceleration level decides the next phase (select_mode).
+// Painleve situations are logged; an inconsistent one ends the run (Termination::Painleve).
+// Impacts accumulating (e_n > 0) are detected by the bounce height falling below the position
+// tolerance; the remaining sequence is truncated by a plastic impact (logged as zeno with the
+// extrapolated accumulation time). A bound on events per simulated second ends chattering runs.
+// Output: dense samples on the output grid (CV_NORMAL interpolation: the output interval never
+// changes the steps), plus samples before and after each event.
+#include <functional>
+
+#include "rubdyn/core/run_types.hpp"
+#include "rubdyn/model/lagrangian_model.hpp"
+
+namespace rubdyn {
+
+struct EventDrivenOptions {
+  double rtol = 1e-10;
+  double atol = 1e-12;  ///< absolute tolerance on positions [m]; velocities: atol * 1e3 [m/s]
+  bool adams = false;   ///< free flight with Adams-Moulton instead of BDF (contact phases: BDF)
+  double output_dt = 1e-4;
+  double omega_lim = 0.0;  ///< crossing time reported (0: none)
+  double max_events_per_second = 1e6;
+  long max_steps_per_phase = 10'000'000;
+  /// Called at output samples with (t, events so far, omega, phase); may be empty.
+  std::function<void(double, long, double, Phase)> progress;
+};
+
+/// Integrates from `initial` to t_end; hands samples, events and the summary to `sink`.
+/// Never throws from inside the time loop: numerical trouble ends the run with a typed
+/// termination, a message, and everything produced so far.
+RunSummary run_event_driven(const LagrangianModel& model, const MechanicalState& initial,
+                            double t_end, const EventDrivenOptions& opt, OutputSink& sink);
+
+}  // namespace rubdyn

@@ -1,0 +1,242 @@
+#include "cvode_session.hpp"
+
+#include <cvodes/cvodes.h>
+#include <cvodes/cvodes_proj.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
+namespace rubdyn::detail {
+
+namespace {
+
+void check(int flag, const char* what) {
+  if (flag < 0) {
+    throw std::runtime_error(std::string("CVODE: ") + what + " failed: " +
+                             CVodeGetReturnFlagName(flag));
+  }
+}
+
+}  // namespace
+
+struct CvodeSession::Impl {
+  int n = 0, nq = 0;
+  SUNContext ctx = nullptr;
+  N_Vector y = nullptr, atol = nullptr, q = nullptr, qatol = nullptr;
+  SUNMatrix A = nullptr;
+  SUNLinearSolver LS = nullptr;
+  void* mem = nullptr;
+  CvodeCallbacks cb;
+  CvodeStats acc;  // counters of previous restarts
+  bool started = false;
+  int n_roots = 0;
+
+  static int rhs(realtype t, N_Vector y, N_Vector yd, void* ud) {
+    auto* self = static_cast<Impl*>(ud);
+    return self->cb.rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yd), self->cb.user);
+  }
+  static int jac(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* ud, N_Vector, N_Vector,
+                 N_Vector) {
+    auto* self = static_cast<Impl*>(ud);
+    return self->cb.jac(t, N_VGetArrayPointer(y), N_VGetArrayPointer(fy), SM_DATA_D(J),
+                        self->cb.user);
+  }
+  static int roots(realtype t, N_Vector y, realtype* g, void* ud) {
+    auto* self = static_cast<Impl*>(ud);
+    return self->cb.roots(t, N_VGetArrayPointer(y), g, self->cb.user);
+  }
+  static int proj(realtype t, N_Vector y, N_Vector corr, realtype /*eps*/, N_Vector /*err*/,
+                  void* ud) {
+    auto* self = static_cast<Impl*>(ud);
+    return self->cb.proj(t, N_VGetArrayPointer(y), N_VGetArrayPointer(corr), self->cb.user);
+  }
+  static int quad(realtype t, N_Vector y, N_Vector qd, void* ud) {
+    auto* self = static_cast<Impl*>(ud);
+    return self->cb.quad(t, N_VGetArrayPointer(y), N_VGetArrayPointer(qd), self->cb.user);
+  }
+
+  void collect() {
+    if (!started) return;
+    long v = 0;
+    CVodeGetNumSteps(mem, &v);
+    acc.steps += v;
+    CVodeGetNumRhsEvals(mem, &v);
+    acc.rhs_evals += v;
+    CVodeGetNumJacEvals(mem, &v);
+    acc.jac_evals += v;
+    CVodeGetNumGEvals(mem, &v);
+    acc.root_evals += v;
+    CVodeGetNumNonlinSolvIters(mem, &v);
+    acc.newton_iters += v;
+    CVodeGetNumErrTestFails(mem, &v);
+    acc.err_test_fails += v;
+    CVodeGetNumNonlinSolvConvFails(mem, &v);
+    acc.conv_fails += v;
+  }
+
+  ~Impl() {
+    if (mem) CVodeFree(&mem);
+    if (LS) SUNLinSolFree(LS);
+    if (A) SUNMatDestroy(A);
+    if (y) N_VDestroy(y);
+    if (atol) N_VDestroy(atol);
+    if (q) N_VDestroy(q);
+    if (qatol) N_VDestroy(qatol);
+    if (ctx) SUNContext_Free(&ctx);
+  }
+};
+
+CvodeSession::CvodeSession(int n, int nq, CvodeMethod method, double rtol, const double* atol,
+                           const double* qatol, const CvodeCallbacks& cb, long max_steps)
+    : impl_(std::make_unique<Impl>()) {
+  auto& I = *impl_;
+  I.n = n;
+  I.nq = nq;
+  I.cb = cb;
+  check(SUNContext_Create(nullptr, &I.ctx), "SUNContext_Create");
+  I.y = N_VNew_Serial(n, I.ctx);
+  I.atol = N_VNew_Serial(n, I.ctx);
+  std::memcpy(N_VGetArrayPointer(I.atol), atol, sizeof(double) * n);
+  N_VConst(0.0, I.y);
+  I.mem = CVodeCreate(method == CvodeMethod::BDF ? CV_BDF : CV_ADAMS, I.ctx);
+  if (!I.mem) throw std::runtime_error("CVODE: CVodeCreate failed");
+  check(CVodeInit(I.mem, &Impl::rhs, 0.0, I.y), "CVodeInit");
+  check(CVodeSetUserData(I.mem, &I), "CVodeSetUserData");
+  check(CVodeSVtolerances(I.mem, rtol, I.atol), "CVodeSVtolerances");
+  check(CVodeSetMaxNumSteps(I.mem, max_steps), "CVodeSetMaxNumSteps");
+  I.A = SUNDenseMatrix(n, n, I.ctx);
+  I.LS = SUNLinSol_Dense(I.y, I.A, I.ctx);
+  check(CVodeSetLinearSolver(I.mem, I.LS, I.A), "CVodeSetLinearSolver");
+  if (cb.jac) check(CVodeSetJacFn(I.mem, &Impl::jac), "CVodeSetJacFn");
+  if (cb.proj) {
+    check(CVodeSetProjFn(I.mem, &Impl::proj), "CVodeSetProjFn");
+    check(CVodeSetProjErrEst(I.mem, SUNFALSE), "CVodeSetProjErrEst");
+  }
+  if (nq > 0) {
+    I.q = N_VNew_Serial(nq, I.ctx);
+    I.qatol = N_VNew_Serial(nq, I.ctx);
+    std::memcpy(N_VGetArrayPointer(I.qatol), qatol, sizeof(double) * nq);
+    N_VConst(0.0, I.q);
+    check(CVodeQuadInit(I.mem, &Impl::quad, I.q), "CVodeQuadInit");
+    check(CVodeQuadSVtolerances(I.mem, rtol, I.qatol), "CVodeQuadSVtolerances");
+    check(CVodeSetQuadErrCon(I.mem, SUNTRUE), "CVodeSetQuadErrCon");
+  }
+}
+
+CvodeSession::~CvodeSession() = default;
+
+void CvodeSession::restart(double t0, const double* y0, const double* q0, int n_roots,
+                           const int* directions, bool projection, double h_init, double t_stop) {
+  auto& I = *impl_;
+  I.collect();
+  std::memcpy(N_VGetArrayPointer(I.y), y0, sizeof(double) * I.n);
+  check(CVodeReInit(I.mem, t0, I.y), "CVodeReInit");
+  if (I.nq > 0) {
+    std::memcpy(N_VGetArrayPointer(I.q), q0, sizeof(double) * I.nq);
+    check(CVodeQuadReInit(I.mem, I.q), "CVodeQuadReInit");
+  }
+  set_roots(n_roots, directions);
+  if (I.cb.proj) check(CVodeSetProjFrequency(I.mem, projection ? 1 : 0), "CVodeSetProjFrequency");
+  check(CVodeSetInitStep(I.mem, h_init), "CVodeSetInitStep");
+  check(CVodeSetStopTime(I.mem, t_stop), "CVodeSetStopTime");
+  I.started = true;
+}
+
+void CvodeSession::set_roots(int n_roots, const int* directions) {
+  auto& I = *impl_;
+  check(CVodeRootInit(I.mem, n_roots, n_roots > 0 ? &Impl::roots : nullptr), "CVodeRootInit");
+  if (n_roots > 0) {
+    int dirs[16];
+    for (int i = 0; i < n_roots && i < 16; ++i) dirs[i] = directions[i];
+    check(CVodeSetRootDirection(I.mem, dirs), "CVodeSetRootDirection");
+    // CVODE warns when a witness is zero at t0 and keeps it inactive until it moves away:
+    // that is the half-open interval rule we rely on; the warning itself is not useful.
+    check(CVodeSetNoInactiveRootWarn(I.mem), "CVodeSetNoInactiveRootWarn");
+  }
+  I.n_roots = n_roots;
+}
+
+CvodeSession::Status CvodeSession::advance(double tout, double& t, double* y) {
+  auto& I = *impl_;
+  realtype tret = 0.0;
+  const int flag = CVode(I.mem, tout, I.y, &tret, CV_NORMAL);
+  t = tret;
+  std::memcpy(y, N_VGetArrayPointer(I.y), sizeof(double) * I.n);
+  if (flag == CV_ROOT_RETURN) return Status::Root;
+  if (flag == CV_SUCCESS || flag == CV_TSTOP_RETURN) return Status::Reached;
+  last_error_ = CVodeGetReturnFlagName(flag);
+  return Status::Failure;
+}
+
+void CvodeSession::dky(double t, int k, double* out) const {
+  auto& I = *impl_;
+  N_Vector v = N_VMake_Serial(I.n, out, I.ctx);
+  const int flag = CVodeGetDky(I.mem, t, k, v);
+  N_VDestroy(v);
+  check(flag, "CVodeGetDky");
+}
+
+void CvodeSession::quadratures(double* q) const {
+  auto& I = *impl_;
+  if (I.nq == 0) return;
+  realtype tq = 0.0;
+  N_Vector v = N_VMake_Serial(I.nq, q, I.ctx);
+  const int flag = CVodeGetQuad(I.mem, &tq, v);
+  N_VDestroy(v);
+  check(flag, "CVodeGetQuad");
+}
+
+void CvodeSession::quadratures_at(double t, double* q) const {
+  auto& I = *impl_;
+  if (I.nq == 0) return;
+  N_Vector v = N_VMake_Serial(I.nq, q, I.ctx);
+  const int flag = CVodeGetQuadDky(I.mem, t, 0, v);
+  N_VDestroy(v);
+  check(flag, "CVodeGetQuadDky");
+}
+
+void CvodeSession::root_info(int* info) const {
+  check(CVodeGetRootInfo(impl_->mem, info), "CVodeGetRootInfo");
+}
+
+double CvodeSession::last_step() const {
+  realtype h = 0.0;
+  CVodeGetLastStep(impl_->mem, &h);
+  return h;
+}
+
+double CvodeSession::current_time() const {
+  realtype t = 0.0;
+  CVodeGetCurrentTime(impl_->mem, &t);
+  return t;
+}
+
+CvodeStats CvodeSession::stats() const {
+  auto& I = *impl_;
+  CvodeStats s = I.acc;
+  if (I.started) {
+    long v = 0;
+    CVodeGetNumSteps(I.mem, &v);
+    s.steps += v;
+    CVodeGetNumRhsEvals(I.mem, &v);
+    s.rhs_evals += v;
+    CVodeGetNumJacEvals(I.mem, &v);
+    s.jac_evals += v;
+    CVodeGetNumGEvals(I.mem, &v);
+    s.root_evals += v;
+    CVodeGetNumNonlinSolvIters(I.mem, &v);
+    s.newton_iters += v;
+    CVodeGetNumErrTestFails(I.mem, &v);
+    s.err_test_fails += v;
+    CVodeGetNumNonlinSolvConvFails(I.mem, &v);
+    s.conv_fails += v;
+  }
+  return s;
+}
+
+}  // namespace rubdyn::detail

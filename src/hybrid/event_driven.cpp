@@ -1,0 +1,737 @@
+#include "rubdyn/hybrid/event_driven.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <fmt/format.h>
+#include <memory>
+#include <stdexcept>
+
+#include "cvode_session.hpp"
+#include "rubdyn/core/run_monitor.hpp"
+#include "rubdyn/hybrid/contact_problem.hpp"
+
+namespace rubdyn {
+
+namespace {
+
+constexpr int kN = 2 * kNumDofs;  // state y = (q, v)
+constexpr int kNq = 3;            // quadratures: work of applied loads, dampers, friction
+
+// Witness identifiers (what fired), in the order they are built for each phase.
+enum class Witness { Gap, GapRate, NormalForce, SlipSpeed, ConeUpper, ConeLower, Omega };
+
+const char* witness_name(Witness w) {
+  switch (w) {
+    case Witness::Gap: return "d_N";
+    case Witness::GapRate: return "v_N";
+    case Witness::NormalForce: return "F_N";
+    case Witness::SlipSpeed: return "v_t";
+    case Witness::ConeUpper: return "mu*F_N-F_T";
+    case Witness::ConeLower: return "mu*F_N+F_T";
+    case Witness::Omega: return "omega-omega_lim";
+  }
+  return "?";
+}
+
+class Integrator {
+ public:
+  Integrator(const LagrangianModel& m, const EventDrivenOptions& opt, OutputSink& sink)
+      : m_(m), opt_(opt), sink_(sink), law_(m.contact_law()), mon_(law_.mu, opt.omega_lim) {
+    g0_ = m.gap_scale();
+    atol_q_ = opt.atol;
+    atol_v_ = opt.atol * 1e3;
+    v_tol_ = 10.0 * atol_v_;
+    graze_tol_ = 10.0 * atol_q_;
+    v_ref_ = std::max(1e3 * g0_, 1e-300);
+    omega_pending_ = opt.omega_lim > 0.0;
+  }
+
+  RunSummary run(const MechanicalState& init, double t_end);
+
+ private:
+  // ---- callbacks (user = this) ----
+  static int rhs(double t, const double* y, double* yd, void* u) {
+    auto* self = static_cast<Integrator*>(u);
+    return self->eval_rhs(t, y, yd);
+  }
+  static int jac(double t, const double* y, const double*, double* J, void* u) {
+    return static_cast<Integrator*>(u)->eval_jac(t, y, J);
+  }
+  static int roots(double t, const double* y, double* g, void* u) {
+    return static_cast<Integrator*>(u)->eval_roots(t, y, g);
+  }
+  static int proj(double t, const double* y, double* corr, void* u) {
+    return static_cast<Integrator*>(u)->eval_proj(t, y, corr);
+  }
+  static int quad(double t, const double* y, double* qd, void* u) {
+    return static_cast<Integrator*>(u)->eval_quad(t, y, qd);
+  }
+
+  static void split(const double* y, Vec7& q, Vec7& v) {
+    q = Eigen::Map<const Vec7>(y);
+    v = Eigen::Map<const Vec7>(y + kNumDofs);
+  }
+
+  int eval_rhs(double t, const double* y, double* yd) {
+    Vec7 q, v;
+    split(y, q, v);
+    Vec7 a;
+    if (phase_ == Phase::Free) {
+      // Free flight needs only M and f: no contact quantities are built here.
+      Mat7 M;
+      Vec7 f;
+      m_.mass_matrix(q, M);
+      m_.smooth_forces(t, q, v, f);
+      a = M.ldlt().solve(f);
+    } else {
+      ContactOperators op;
+      compute_contact_operators(m_, t, q, v, op);
+      const PhaseDynamics d = phase_dynamics(op, phase_, law_.mu);
+      if (!d.well_posed) return 1;  // recoverable: CVODE retries with a smaller step
+      a = d.a;
+    }
+    Eigen::Map<Vec7> yd_q(yd), yd_v(yd + kNumDofs);
+    yd_q = v;
+    yd_v = a;
+    return a.allFinite() ? 0 : 1;
+  }
+
+  // Analytic Jacobian of free flight: d/dq (M^{-1} f) = M^{-1} (df/dq - d(M a)/dq), with a fixed.
+  int eval_jac(double t, const double* y, double* J) {
+    Vec7 q, v;
+    split(y, q, v);
+    Mat7 M, dfdq, dfdv, dMa;
+    Vec7 f;
+    m_.mass_matrix(q, M);
+    m_.smooth_forces(t, q, v, f);
+    m_.smooth_force_jacobians(t, q, v, dfdq, dfdv);
+    const Eigen::LDLT<Mat7> ldlt(M);
+    const Vec7 a = ldlt.solve(f);
+    m_.mass_matrix_product_jacobian(q, a, dMa);
+    const Mat7 daq = ldlt.solve(dfdq - dMa);
+    const Mat7 dav = ldlt.solve(dfdv);
+    Eigen::Map<Mat14> Jm(J);  // column-major, as SUNDIALS' dense matrix
+    Jm.setZero();
+    Jm.topRightCorner<kNumDofs, kNumDofs>().setIdentity();
+    Jm.bottomLeftCorner<kNumDofs, kNumDofs>() = daq;
+    Jm.bottomRightCorner<kNumDofs, kNumDofs>() = dav;
+    return 0;
+  }
+
+  /// Projects an interpolated state of a contact phase onto the constraints (as at step ends).
+  void project_state(double t, Vec7& q, Vec7& v) const {
+    project_position(t, q, v);
+    ContactOperators op;
+    compute_contact_operators(m_, t, q, v, op);
+    project_velocity(op, phase_ == Phase::Stick ? 2 : 1, v);
+  }
+
+  int eval_roots(double t, const double* y, double* g) {
+    Vec7 q, v;
+    split(y, q, v);
+    // Witnesses of a contact phase are functions on the constraint manifold: evaluate them at
+    // the projected state (the interpolant between step ends is not projected).
+    if (phase_ != Phase::Free) project_state(t, q, v);
+    int k = 0;
+    for (Witness w : witnesses_) {
+      switch (w) {
+        case Witness::Gap: {
+          const ContactKinematics c = m_.contact(q, v);
+          g[k] = c.d_N / g0_;
+          break;
+        }
+        case Witness::GapRate: {
+          const ContactKinematics c = m_.contact(q, v);
+          g[k] = c.v_N / v_ref_;
+          break;
+        }
+        case Witness::NormalForce:
+        case Witness::ConeUpper:
+        case Witness::ConeLower: {
+          ContactOperators op;
+          compute_contact_operators(m_, t, q, v, op);
+          const PhaseDynamics d = phase_dynamics(op, phase_, law_.mu);
+          g[k] = w == Witness::NormalForce
+                     ? d.F_N / F_ref_
+                     : (law_.mu * d.F_N + (w == Witness::ConeUpper ? -d.F_T : d.F_T)) / F_ref_;
+          break;
+        }
+        case Witness::SlipSpeed: {
+          const ContactKinematics c = m_.contact(q, v);
+          g[k] = c.v_t / v_ref_;
+          break;
+        }
+        case Witness::Omega:
+          g[k] = (v[TH] - opt_.omega_lim) / opt_.omega_lim;
+          break;
+      }
+      ++k;
+    }
+    return 0;
+  }
+
+  // Projection onto the contact constraints (contact phases only): positions onto d_N = 0 by a
+  // mass-weighted Newton step, velocities onto v_N = 0 (and v_t = 0 in stick), mass-weighted.
+  int eval_proj(double t, const double* y, double* corr) {
+    Vec7 q, v;
+    split(y, q, v);
+    const Vec7 q0 = q, v0 = v;
+    project_state(t, q, v);
+    Eigen::Map<Vec7> corr_q(corr), corr_v(corr + kNumDofs);
+    corr_q = q - q0;
+    corr_v = v - v0;
+    return q.allFinite() && v.allFinite() ? 0 : -1;
+  }
+
+  int eval_quad(double t, const double* y, double* qd) {
+    Vec7 q, v;
+    split(y, q, v);
+    const SmoothPower p = m_.smooth_power(t, q, v);
+    qd[0] = p.external;
+    qd[1] = p.damping;
+    qd[2] = 0.0;
+    if (phase_ == Phase::SlipPos || phase_ == Phase::SlipNeg) {
+      ContactOperators op;
+      compute_contact_operators(m_, t, q, v, op);
+      const PhaseDynamics d = phase_dynamics(op, phase_, law_.mu);
+      qd[2] = d.F_T * op.c.v_t;
+    }
+    return 0;
+  }
+
+  // ---- helpers ----
+  void state_from(const Vec14& y, Vec7& q, Vec7& v) const { split(y.data(), q, v); }
+
+  /// Contact forces of the current phase at (t, q, v).
+  void forces(double t, const Vec7& q, const Vec7& v, double& FN, double& FT) const {
+    FN = FT = 0.0;
+    if (phase_ == Phase::Free) return;
+    ContactOperators op;
+    compute_contact_operators(m_, t, q, v, op);
+    const PhaseDynamics d = phase_dynamics(op, phase_, law_.mu);
+    FN = d.F_N;
+    FT = d.F_T;
+  }
+
+  void emit_sample(double t, const Vec14& y) {
+    Sample s;
+    s.t = t;
+    state_from(y, s.q, s.v);
+    // Dense output inside a contact phase is CVODE's interpolant, which is not projected:
+    // project it like a step end, so that every output state satisfies the constraints.
+    if (phase_ != Phase::Free) project_state(t, s.q, s.v);
+    const ContactKinematics c = m_.contact(s.q, s.v);
+    s.d_N = c.d_N;
+    s.v_N = c.v_N;
+    s.v_t = c.v_t;
+    forces(t, s.q, s.v, s.F_N, s.F_T);
+    s.phase = phase_;
+    mon_.observe(t, s.v[TH], s.d_N, s.v_N, s.F_N, s.F_T, phase_ != Phase::Free);
+    sink_.sample(s);
+  }
+
+  void build_witnesses() {
+    witnesses_.clear();
+    dirs_.clear();
+    auto add = [&](Witness w, int dir) {
+      witnesses_.push_back(w);
+      dirs_.push_back(dir);
+    };
+    switch (phase_) {
+      case Phase::Free:
+        add(Witness::Gap, -1);
+        add(Witness::GapRate, +1);
+        break;
+      case Phase::SlipPos:
+      case Phase::SlipNeg:
+        add(Witness::NormalForce, -1);
+        // mu = 0: no tangential witness (the slip direction is irrelevant without friction)
+        if (law_.has_friction()) add(Witness::SlipSpeed, phase_ == Phase::SlipPos ? -1 : +1);
+        break;
+      case Phase::Stick:
+        add(Witness::NormalForce, -1);
+        add(Witness::ConeUpper, -1);
+        add(Witness::ConeLower, -1);
+        break;
+    }
+    if (omega_pending_) add(Witness::Omega, +1);
+  }
+
+  /// Starts (or restarts) integration of the current phase at (t, y).
+  void start_phase(double t, const Vec14& y) {
+    phase_start_ = t;
+    t_restart_ = t;
+    y_restart_ = y;
+    build_witnesses();
+    if (phase_ != Phase::Free) {
+      Vec7 q, v;
+      state_from(y, q, v);
+      double FN = 0, FT = 0;
+      forces(t, q, v, FN, FT);
+      F_ref_ = std::max(std::abs(FN), 1e-6);
+    }
+    detail::CvodeSession& s = phase_ == Phase::Free ? *free_ : *contact_;
+    cur_ = &s;
+    s.restart(t, y.data(), work_.data(), static_cast<int>(witnesses_.size()), dirs_.data(),
+              phase_ != Phase::Free, 0.0, t_end_);
+  }
+
+  /// Mass-weighted Newton steps putting q exactly on d_N = 0 (a change of the order of the
+  /// root-finding tolerance at events; of round-off in projections).
+  void project_position(double t, Vec7& q, const Vec7& v) const {
+    ContactOperators op;
+    for (int it = 0; it < 2; ++it) {
+      compute_contact_operators(m_, t, q, v, op);
+      q -= op.Minv_WN * (op.c.d_N / op.A_NN);
+    }
+  }
+
+  void end_phase(double t) { sum_.phase_time[static_cast<int>(phase_)] += t - phase_start_; }
+
+  /// Quadratures (works) at t inside the last step of the current session.
+  void works_at(double t) { cur_->quadratures_at(t, work_.data()); }
+
+  void fail(Termination why, const std::string& msg) {
+    sum_.termination = why;
+    sum_.message = msg;
+  }
+
+  bool chattering(double t) {
+    event_times_[n_events_ % event_times_.size()] = t;
+    ++n_events_;
+    if (n_events_ < static_cast<long>(event_times_.size())) return false;
+    const double oldest = event_times_[n_events_ % event_times_.size()];
+    const double window = static_cast<double>(event_times_.size()) / opt_.max_events_per_second;
+    return t - oldest < window;
+  }
+
+  void log_event(EventRecord& e) {
+    ++sum_.events[static_cast<int>(e.kind)];
+    sink_.event(e);
+  }
+
+  // Event handlers return false when the run must end.
+  bool on_gap_closing(double t, Vec14 y, bool missed_crossing);
+  bool switch_on_constraint(double t, Vec14 y, EventRecord e, double rel_tol);
+  bool on_contact_witness(double t, const Vec14& y, Witness w);
+
+  const LagrangianModel& m_;
+  const EventDrivenOptions& opt_;
+  OutputSink& sink_;
+  const ContactLaw law_;
+  RunMonitor mon_;
+  RunSummary sum_;
+  double g0_ = 1, atol_q_ = 0, atol_v_ = 0, v_tol_ = 0, graze_tol_ = 0, v_ref_ = 1, F_ref_ = 1;
+  double t_end_ = 0, phase_start_ = 0, t_restart_ = 0;
+  Vec14 y_restart_ = Vec14::Zero();
+  bool omega_pending_ = false;
+  Phase phase_ = Phase::Free;
+  std::vector<Witness> witnesses_;
+  std::vector<int> dirs_;
+  std::array<double, kNq> work_{};
+  double work_impacts_ = 0.0;
+  std::unique_ptr<detail::CvodeSession> free_, contact_;
+  detail::CvodeSession* cur_ = nullptr;
+  std::array<double, 64> event_times_{};
+  long n_events_ = 0;
+  int same_time_events_ = 0;
+  double last_event_t_ = -1e300;
+};
+
+/// Contact onset at the root of d_N (or at a missed double crossing): polish, impact or not,
+/// decide the next phase.
+bool Integrator::on_gap_closing(double t, Vec14 y, bool missed_crossing) {
+  Vec7 q, v;
+  // Polish the event time: Newton on d_N(t) along the interpolant (inside the last step).
+  const double t_hi = cur_->current_time(), t_lo = t_hi - cur_->last_step();
+  for (int it = 0; it < 3; ++it) {
+    state_from(y, q, v);
+    const ContactKinematics c = m_.contact(q, v);
+    if (c.v_N == 0.0) break;
+    const double tn = std::clamp(t - c.d_N / c.v_N, t_lo, t_hi);
+    if (tn == t) break;
+    t = tn;
+    cur_->dky(t, 0, y.data());
+  }
+  works_at(t);
+  end_phase(t);
+  state_from(y, q, v);
+  project_position(t, q, v);
+  ContactOperators op;
+  compute_contact_operators(m_, t, q, v, op);
+  y.head<kNumDofs>() = q;
+  emit_sample(t, y);
+
+  EventRecord e;
+  e.t = t;
+  e.phase_before = phase_;
+  e.d_N = op.c.d_N;
+  e.v_N_minus = op.c.v_N;
+  e.v_t_minus = op.c.v_t;
+  e.witness = missed_crossing ? "v_N (gap minimum below 0: double crossing inside a step)" : "d_N";
+  if (op.c.v_N < -v_tol_) {
+    e.kind = EventKind::Impact;
+    const ImpactResult r = impact_map(op, v, law_);
+    if (!r.ok) {
+      e.kind = EventKind::Painleve;
+      e.note = "impact problem ill-posed: the sliding impact mass A_NN + sigma mu A_NT <= 0";
+      log_event(e);
+      fail(Termination::Painleve, fmt::format("at t = {:.17g}: {}", t, e.note));
+      return false;
+    }
+    const double T_minus = m_.kinetic_energy(q, v);
+    Vec7 vp = r.v_plus;
+    e.P_N = r.P_N;
+    e.P_T = r.P_T;
+    e.note = r.sticking ? "sticking impulse" : "sliding impulse";
+    ContactOperators opp;
+    compute_contact_operators(m_, t, q, vp, opp);
+    if (law_.has_restitution() && opp.c.v_N > v_tol_) {
+      // Accumulation (Zeno): the next bounce rises h = v_N+^2 / (2 |b_N|) under the free normal
+      // acceleration b_N < 0. Below the position tolerance it cannot be resolved: the remaining
+      // sequence (total duration 2 v_N+ / (|b_N| (1 - e_n)) for a constant b_N) is truncated by
+      // a plastic impact and the contact persists.
+      const double bN = opp.b_N;
+      const double height = bN < 0.0 ? opp.c.v_N * opp.c.v_N / (-2.0 * bN) : 1e300;
+      if (height < graze_tol_) {
+        const double t_inf = t + 2.0 * opp.c.v_N / (-bN * (1.0 - law_.e_n));
+        ContactLaw plastic = law_;
+        plastic.e_n = 0.0;
+        const ImpactResult rp = impact_map(op, v, plastic);
+        vp = rp.v_plus;
+        e.kind = EventKind::Zeno;
+        e.P_N = rp.P_N;
+        e.P_T = rp.P_T;
+        e.note = fmt::format(
+            "accumulation of impacts: bounce height {:.3g} m below tolerance; extrapolated "
+            "accumulation time {:.17g} s (truncated {:.3g} s)",
+            height, t_inf, t_inf - t);
+      } else {
+        work_impacts_ += m_.kinetic_energy(q, vp) - T_minus;
+        y.tail<kNumDofs>() = vp;
+        e.v_N_plus = opp.c.v_N;
+        e.v_t_plus = opp.c.v_t;
+        e.phase_after = Phase::Free;
+        log_event(e);
+        phase_ = Phase::Free;
+        emit_sample(t, y);
+        start_phase(t, y);
+        return true;
+      }
+    }
+    work_impacts_ += m_.kinetic_energy(q, vp) - T_minus;
+    y.tail<kNumDofs>() = vp;
+  } else {
+    e.kind = EventKind::Contact;  // arrival with v_N ~ 0: no impact
+    e.note = "arrival with |v_N| below the velocity tolerance";
+  }
+  return switch_on_constraint(t, y, e, 1e-9);
+}
+
+/// On the constraint (d_N = 0): make v_N exactly 0, let the contact problem decide the phase,
+/// log the event and restart.
+bool Integrator::switch_on_constraint(double t, Vec14 y, EventRecord e, double rel_tol) {
+  Vec7 q, v;
+  state_from(y, q, v);
+  project_position(t, q, v);
+  y.head<kNumDofs>() = q;
+  ContactOperators op;
+  compute_contact_operators(m_, t, q, v, op);
+  const double T_before = m_.kinetic_energy(q, v);
+  const bool near_stick = law_.has_friction() && std::abs(op.c.v_t) <= v_tol_;
+  project_velocity(op, near_stick ? 2 : 1, v);
+  work_impacts_ += m_.kinetic_energy(q, v) - T_before;  // the (tiny) projection is an impulse
+  compute_contact_operators(m_, t, q, v, op);
+  const ModeDecision d = select_mode(op, law_.mu, v_tol_, rel_tol);
+  y.tail<kNumDofs>() = v;
+  e.v_N_plus = op.c.v_N;
+  e.v_t_plus = op.c.v_t;
+  e.phase_after = d.phase;
+  e.F_N = d.dyn.F_N;
+  e.F_T = d.dyn.F_T;
+  if (!d.note.empty()) e.note += (e.note.empty() ? "" : "; ") + d.note;
+  if (d.painleve) {
+    EventRecord p = e;
+    p.kind = EventKind::Painleve;
+    log_event(p);
+    if (d.n_consistent == 0) {
+      fail(Termination::Painleve, fmt::format("at t = {:.17g}: {}", t, d.note));
+      return false;
+    }
+  }
+  log_event(e);
+  // a release with the state exactly on the constraint: the free phase starts at d_N = 0
+  phase_ = d.phase;
+  emit_sample(t, y);
+  start_phase(t, y);
+  return true;
+}
+
+bool Integrator::on_contact_witness(double t, const Vec14& y, Witness w) {
+  works_at(t);
+  end_phase(t);
+  Vec7 q, v;
+  state_from(y, q, v);
+  emit_sample(t, y);
+  const ContactKinematics c = m_.contact(q, v);
+  EventRecord e;
+  e.t = t;
+  e.phase_before = phase_;
+  e.d_N = c.d_N;
+  e.v_N_minus = c.v_N;
+  e.v_t_minus = c.v_t;
+  e.witness = witness_name(w);
+  switch (w) {
+    case Witness::NormalForce: e.kind = EventKind::Liftoff; break;
+    case Witness::SlipSpeed: e.kind = EventKind::Stick; break;  // refined below
+    default: e.kind = EventKind::Slip; break;
+  }
+  // Decide with a band of 1e-7 relative: the witness is zero at the event to the accuracy of
+  // the root location on the interpolant, so a margin of that size is a zero, not a sign.
+  return switch_on_constraint(t, y, e, 1e-7);
+}
+
+RunSummary Integrator::run(const MechanicalState& init, double t_end) {
+  const auto wall0 = std::chrono::steady_clock::now();
+  t_end_ = t_end;
+  sum_.solver = "event";
+  sum_.options = fmt::format(
+      "{{\"rtol\": {:.3g}, \"atol\": {:.3g}, \"free_flight\": \"{}\", \"contact_phases\": "
+      "\"bdf+projection\", \"output_dt\": {:.6g}}}",
+      opt_.rtol, opt_.atol, opt_.adams ? "adams" : "bdf", opt_.output_dt);
+  sum_.t_start = init.t;
+  sum_.t_end_requested = t_end;
+
+  // sessions
+  std::array<double, kN> atol{};
+  for (int i = 0; i < kNumDofs; ++i) {
+    atol[i] = atol_q_;
+    atol[kNumDofs + i] = atol_v_;
+  }
+  const std::array<double, kNq> qatol{1e-9, 1e-9, 1e-9};
+  detail::CvodeCallbacks cb_free{&rhs, &jac, &roots, nullptr, &quad, this};
+  detail::CvodeCallbacks cb_contact{&rhs, nullptr, &roots, &proj, &quad, this};
+  try {
+    free_ = std::make_unique<detail::CvodeSession>(
+        kN, kNq, opt_.adams ? detail::CvodeMethod::Adams : detail::CvodeMethod::BDF, opt_.rtol,
+        atol.data(), qatol.data(), cb_free, opt_.max_steps_per_phase);
+    contact_ = std::make_unique<detail::CvodeSession>(kN, kNq, detail::CvodeMethod::BDF,
+                                                      opt_.rtol, atol.data(), qatol.data(),
+                                                      cb_contact, opt_.max_steps_per_phase);
+  } catch (const std::exception& ex) {
+    fail(Termination::SolverFailure, ex.what());
+    sink_.end(sum_);
+    return sum_;
+  }
+
+  Vec14 y;
+  y.head<kNumDofs>() = init.q;
+  y.tail<kNumDofs>() = init.v;
+  double t = init.t;
+  const double E0 = m_.kinetic_energy(init.q, init.v) + m_.potential_energy(init.q);
+  sum_.energy_initial = E0;
+  bool ok = true;
+
+  try {
+    // Initial phase: free unless the state is on the constraint.
+    const ContactKinematics c0 = m_.contact(init.q, init.v);
+    phase_ = Phase::Free;
+    if (c0.d_N < -graze_tol_) {
+      fail(Termination::SolverFailure,
+           fmt::format("initial state penetrates the stator: d_N = {:.6g} m", c0.d_N));
+      ok = false;
+    } else if (c0.normal_defined && c0.d_N <= graze_tol_ && c0.v_N <= v_tol_) {
+      // starts in contact: impact if closing, else the contact problem decides
+      phase_start_ = t;
+      free_->restart(t, y.data(), work_.data(), 0, nullptr, false, 0.0, t_end_);
+      cur_ = free_.get();
+      if (c0.v_N < -v_tol_) {
+        ok = on_gap_closing(t, y, false);
+      } else {
+        EventRecord e;
+        e.t = t;
+        e.kind = EventKind::Contact;
+        e.witness = "initial state on the constraint";
+        ok = switch_on_constraint(t, y, e, 1e-9);
+      }
+    } else {
+      emit_sample(t, y);
+      start_phase(t, y);
+    }
+
+    long k_out = 1;
+    double next_out = init.t + opt_.output_dt;
+    std::vector<int> info;
+    while (ok && t < t_end_) {
+      const double tout = std::min(next_out, t_end_);
+      const auto st = cur_->advance(tout, t, y.data());
+      if (!y.allFinite()) {
+        fail(Termination::NonFinite, fmt::format("non-finite state at t = {:.17g}", t));
+        break;
+      }
+      if (st == detail::CvodeSession::Status::Failure) {
+        fail(Termination::SolverFailure,
+             fmt::format("CVODE failed at t = {:.17g} in phase {}: {}", t, to_string(phase_),
+                         cur_->last_error()));
+        break;
+      }
+      if (st == detail::CvodeSession::Status::Reached) {
+        emit_sample(t, y);
+        if (opt_.progress) opt_.progress(t, n_events_, y[kNumDofs + TH], phase_);
+        if (t >= tout && tout == next_out) next_out = init.t + static_cast<double>(++k_out) * opt_.output_dt;
+        continue;
+      }
+      // Root return: find what fired.
+      info.assign(witnesses_.size(), 0);
+      cur_->root_info(info.data());
+      bool restart_needed = false;
+      for (size_t i = 0; i < witnesses_.size() && ok && !restart_needed; ++i) {
+        if (info[i] == 0) continue;
+        const Witness w = witnesses_[i];
+        if (w == Witness::Omega) {
+          mon_.set_omega_lim_time(t);
+          omega_pending_ = false;
+          continue;
+        }
+        // event bookkeeping: a bounded number of events per unit of simulated time
+        if (std::abs(t - last_event_t_) <= 1e-14 * std::max(1.0, std::abs(t))) {
+          if (++same_time_events_ > 20) {
+            fail(Termination::Chattering,
+                 fmt::format("more than 20 events at t = {:.17g}: mode switching loops", t));
+            ok = false;
+            break;
+          }
+        } else {
+          same_time_events_ = 0;
+        }
+        if (phase_ == Phase::Free && w == Witness::GapRate &&
+            t - phase_start_ <= 1e-12 * std::max(1.0, std::abs(t))) {
+          // Half-open interval rule: right after a release on the constraint (v_N = 0, and the
+          // free normal acceleration ~ 0 at a lift-off) the gap rate may dip by round-off and
+          // come back: that is the phase's own start, not a new gap minimum. Counted.
+          ++sum_.suppressed_witnesses;
+          continue;
+        }
+        if (phase_ == Phase::Free && w == Witness::GapRate) {
+          // A gap minimum. Far from contact: nothing to do. Touching: grazing. Below zero: the
+          // gap closed and reopened inside one step (an even crossing the root finder cannot
+          // see): go back to the first crossing.
+          Vec7 q, v;
+          state_from(y, q, v);
+          const ContactKinematics c = m_.contact(q, v);
+          if (c.d_N > graze_tol_) continue;
+          if (c.d_N >= -graze_tol_) {
+            ContactOperators op;
+            compute_contact_operators(m_, t, q, v, op);
+            EventRecord e;
+            e.t = t;
+            e.kind = EventKind::Grazing;
+            e.phase_before = Phase::Free;
+            e.d_N = c.d_N;
+            e.v_N_minus = e.v_N_plus = c.v_N;
+            e.v_t_minus = e.v_t_plus = c.v_t;
+            e.witness = "v_N (gap minimum within tolerance of 0)";
+            if (op.b_N >= 0.0) {
+              e.phase_after = Phase::Free;
+              e.note = "touch and go: the free normal acceleration is >= 0";
+              log_event(e);
+              last_event_t_ = t;
+              if (chattering(t)) {
+                fail(Termination::Chattering, fmt::format("event rate above {:.3g} per second at t = {:.17g}", opt_.max_events_per_second, t));
+                ok = false;
+              }
+              continue;
+            }
+            works_at(t);
+            end_phase(t);
+            ok = switch_on_constraint(t, y, e, 1e-9);
+            restart_needed = true;
+          } else {
+            // bisection for the first zero of d_N inside the last step
+            double lo = cur_->current_time() - cur_->last_step(), hi = t;
+            Vec14 yl;
+            for (int it = 0; it < 100 && hi - lo > 1e-15 * std::max(1.0, std::abs(t)); ++it) {
+              const double mid = 0.5 * (lo + hi);
+              cur_->dky(mid, 0, yl.data());
+              Vec7 ql, vl;
+              state_from(yl, ql, vl);
+              (m_.contact(ql, vl).d_N > 0.0 ? lo : hi) = mid;
+            }
+            cur_->dky(hi, 0, yl.data());
+            ok = on_gap_closing(hi, yl, true);
+            restart_needed = true;
+          }
+        } else if (phase_ == Phase::Free && w == Witness::Gap) {
+          ok = on_gap_closing(t, y, false);
+          restart_needed = true;
+        } else {
+          ok = on_contact_witness(t, y, w);
+          restart_needed = true;
+        }
+        if (restart_needed) {
+          last_event_t_ = t;
+          if (ok && chattering(t)) {
+            fail(Termination::Chattering,
+                 fmt::format("event rate above {:.3g} per second of simulated time at t = {:.17g}",
+                             opt_.max_events_per_second, t));
+            ok = false;
+          }
+        }
+      }
+      if (!ok) break;
+      if (restart_needed) {
+        // the event handler restarted the integration at its (polished) event time
+        t = t_restart_;
+        y = y_restart_;
+      } else if (!omega_pending_ && !witnesses_.empty() && witnesses_.back() == Witness::Omega) {
+        // roots that needed no restart (omega crossing, far gap minimum, touch and go)
+        witnesses_.pop_back();
+        dirs_.pop_back();
+        cur_->set_roots(static_cast<int>(witnesses_.size()), dirs_.data());
+      }
+    }
+  } catch (const std::exception& ex) {
+    fail(Termination::SolverFailure, fmt::format("at t = {:.17g}: {}", t, ex.what()));
+  }
+
+  // Close the books.
+  end_phase(t);
+  sum_.t_reached = t;
+  if (cur_) cur_->quadratures(work_.data());
+  Vec7 q, v;
+  state_from(y, q, v);
+  sum_.energy_final = m_.kinetic_energy(q, v) + m_.potential_energy(q);
+  sum_.work_torque = work_[0];
+  sum_.work_damping = work_[1];
+  sum_.work_friction = work_[2];
+  sum_.work_impacts = work_impacts_;
+  sum_.energy_residual = (sum_.energy_final - sum_.energy_initial) -
+                         (sum_.work_torque + sum_.work_damping + sum_.work_friction +
+                          sum_.work_impacts);
+  mon_.fill(sum_);
+  const auto st = free_ ? free_->stats() : detail::CvodeStats{};
+  const auto sc = contact_ ? contact_->stats() : detail::CvodeStats{};
+  sum_.steps = st.steps + sc.steps;
+  sum_.rhs_evals = st.rhs_evals + sc.rhs_evals;
+  sum_.jac_evals = st.jac_evals + sc.jac_evals;
+  sum_.root_evals = st.root_evals + sc.root_evals;
+  sum_.newton_iters = st.newton_iters + sc.newton_iters;
+  sum_.wall_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  sink_.end(sum_);
+  return sum_;
+}
+
+}  // namespace
+
+RunSummary run_event_driven(const LagrangianModel& model, const MechanicalState& initial,
+                            double t_end, const EventDrivenOptions& opt, OutputSink& sink) {
+  Integrator integ(model, opt, sink);
+  return integ.run(initial, t_end);
+}
+
+}  // namespace rubdyn
