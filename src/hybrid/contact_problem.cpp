@@ -42,7 +42,9 @@ PhaseDynamics phase_dynamics(const ContactOperators& op, Phase phase, double mu)
       const double s = phase == Phase::SlipPos ? 1.0 : -1.0;
       d.normal_mass = op.A_NN - mu * s * op.A_NT;
       d.well_posed = d.normal_mass > 0.0;
-      d.F_N = d.well_posed ? -op.b_N / d.normal_mass : 0.0;
+      // with normal_mass < 0 (Painleve) the slip equations may still have a solution F_N >= 0:
+      // it is computed so that mode selection can see the non-uniqueness
+      d.F_N = d.normal_mass != 0.0 ? -op.b_N / d.normal_mass : 0.0;
       d.F_T = -mu * s * d.F_N;
       d.a = op.Minv_f + op.Minv_WN * d.F_N + op.Minv_WT * d.F_T;
       break;
@@ -94,7 +96,7 @@ ModeDecision select_mode(const ContactOperators& op, double mu, double v_t_eps, 
   const bool sliding = std::abs(op.c.v_t) > v_t_eps;
   cands[n++] = {Phase::Free, phase_dynamics(op, Phase::Free, mu), level(op.b_N, tol_acc)};
   auto slip_level = [&](Phase p, const PhaseDynamics& d) {
-    if (!d.well_posed) return Violated;
+    if (d.normal_mass == 0.0) return Violated;
     Level lv = level(d.F_N, tol_F);
     if (!sliding && mu > 0.0) {
       const double s = p == Phase::SlipPos ? 1.0 : -1.0;

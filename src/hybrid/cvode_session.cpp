@@ -161,14 +161,22 @@ void CvodeSession::set_roots(int n_roots, const int* directions) {
   I.n_roots = n_roots;
 }
 
-CvodeSession::Status CvodeSession::advance(double tout, double& t, double* y) {
+CvodeSession::Status CvodeSession::advance(double tout, double& t, double* y, bool one_step) {
   auto& I = *impl_;
   realtype tret = 0.0;
-  const int flag = CVode(I.mem, tout, I.y, &tret, CV_NORMAL);
+  const int flag = CVode(I.mem, tout, I.y, &tret, one_step ? CV_ONE_STEP : CV_NORMAL);
   t = tret;
   std::memcpy(y, N_VGetArrayPointer(I.y), sizeof(double) * I.n);
   if (flag == CV_ROOT_RETURN) return Status::Root;
-  if (flag == CV_SUCCESS || flag == CV_TSTOP_RETURN) return Status::Reached;
+  if (flag == CV_TSTOP_RETURN) return Status::Reached;
+  if (flag == CV_SUCCESS) {
+    if (one_step && tret < tout) return Status::Step;
+    if (one_step && tret > tout) {  // stepped past tout: interpolate back to it
+      t = tout;
+      dky(tout, 0, y);
+    }
+    return Status::Reached;
+  }
   last_error_ = CVodeGetReturnFlagName(flag);
   return Status::Failure;
 }

@@ -46,10 +46,11 @@ class CvodeSession {
   /// Changes the witnesses without restarting (same state, same history).
   void set_roots(int n_roots, const int* directions);
 
-  enum class Status { Reached, Root, Failure };
+  enum class Status { Reached, Step, Root, Failure };
   /// Advances towards tout (CV_NORMAL: steps are never shortened to hit tout; y is interpolated).
-  /// On Root, t is the root time and y the interpolated state there.
-  Status advance(double tout, double& t, double* y);
+  /// On Root, t is the root time and y the interpolated state there. With one_step, returns
+  /// after one internal step (Status::Step, t = t_n) unless tout or a root comes first.
+  Status advance(double tout, double& t, double* y, bool one_step = false);
   /// k-th derivative of the interpolant at t (inside the last step).
   void dky(double t, int k, double* out) const;
   /// Quadratures at the last returned time.

@@ -72,6 +72,7 @@ struct EventRecord {
   double v_t_minus = 0.0, v_t_plus = 0.0;
   double P_N = 0.0, P_T = 0.0;  ///< impulses
   double F_N = 0.0, F_T = 0.0;  ///< forces after the event
+  double t_accumulation = std::numeric_limits<double>::quiet_NaN();  ///< zeno: extrapolated
   std::string witness;          ///< which witness fired, or how the event was found
   std::string note;             ///< free text (Painleve rule, Zeno truncation estimate, ...)
 };
