@@ -226,3 +226,31 @@ TEST_CASE("Grazing: a tangential touch is detected, logged, and does not change 
   for (const auto& x : sink.samples) err = std::max(err, std::abs(x.q[1] - (1 - std::sin(model.w * x.t))));
   REQUIRE(err < 1e-7);  // rtol 1e-10 over ~1 period on a unit amplitude (cf. the spring-mass test)
 }
+
+TEST_CASE("Event times converge as rtol decreases (block on a belt)", "[events]") {
+  const BlockOnBelt model(0.5, 100.0, 1.0, 0.2);
+  const double t_end = model.slip_time() + 0.1;
+  double prev = 1.0;
+  // Measured (stick, slip time errors): rtol 1e-5 ... 1e-9: ~1e-9 s, flat, because on this
+  // smooth problem the steps (~90) are set by the solution, not by the tolerance; 1e-10: 7.7e-10,
+  // 1e-11: 6.7e-11, 1e-12: 4.8e-12. The test takes 1e-8, 1e-10, 1e-12.
+  for (double rtol : {1e-8, 1e-10, 1e-12}) {
+    MemorySink sink;
+    EventDrivenOptions opt;
+    opt.rtol = rtol;
+    opt.atol = 1e-2 * rtol;
+    opt.output_dt = 1e-2;
+    const RunSummary s = run_event_driven(model, model.initial(), t_end, opt, sink);
+    REQUIRE(s.complete());
+    const auto st = events_of(sink, EventKind::Stick), sl = events_of(sink, EventKind::Slip);
+    REQUIRE(st.size() == 1);
+    REQUIRE(sl.size() == 1);
+    const double err = std::max(std::abs(st[0]->t - model.stick_time()),
+                                std::abs(sl[0]->t - model.slip_time()));
+    INFO("rtol " << rtol << ": event time error " << err);
+    // each 100x tighter tolerance must reduce the error
+    REQUIRE(err < prev);
+    REQUIRE(err < 1e3 * rtol);  // the event time error is of the order of the state error
+    prev = err;
+  }
+}
