@@ -1,6 +1,5 @@
 #include "rubdyn/hybrid/contact_problem.hpp"
 
-#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <fmt/format.h>
@@ -18,14 +17,24 @@ void compute_contact_operators(const LagrangianModel& m, double t, const Vec7& q
   rhs.col(0) = f;
   rhs.col(1) = op.c.W_N;
   rhs.col(2) = op.c.W_T;
-  const Eigen::LDLT<Mat7> ldlt(M);
-  const Eigen::Matrix<double, 7, 3> x = ldlt.solve(rhs);
+  op.ldlt.compute(M);
+  const Eigen::Matrix<double, 7, 3> x = op.ldlt.solve(rhs);
   op.Minv_f = x.col(0);
   op.Minv_WN = x.col(1);
   op.Minv_WT = x.col(2);
   op.A_NN = op.c.W_N.dot(op.Minv_WN);
   op.A_NT = op.c.W_N.dot(op.Minv_WT);
   op.A_TT = op.c.W_T.dot(op.Minv_WT);
+  op.b_N = op.c.W_N.dot(op.Minv_f) + op.c.wdot_N;
+  op.b_T = op.c.W_T.dot(op.Minv_f) + op.c.wdot_T;
+}
+
+void update_contact_velocity(const LagrangianModel& m, double t, const Vec7& q, const Vec7& v,
+                             ContactOperators& op) {
+  Vec7 f;
+  m.smooth_forces(t, q, v, f);
+  op.c = m.contact(q, v);
+  op.Minv_f = op.ldlt.solve(f);
   op.b_N = op.c.W_N.dot(op.Minv_f) + op.c.wdot_N;
   op.b_T = op.c.W_T.dot(op.Minv_f) + op.c.wdot_T;
 }

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <fmt/format.h>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 
@@ -99,6 +100,11 @@ class Integrator {
       const PhaseDynamics d = phase_dynamics(op, phase_, law_.mu);
       if (!d.well_posed) return 1;  // recoverable: CVODE retries with a smaller step
       a = d.a;
+      // CVODES evaluates the quadrature integrand at the same (t, y) right after: keep the
+      // friction power so that eval_quad does not factor M again
+      cache_t_ = t;
+      cache_y_ = Eigen::Map<const Vec14>(y);
+      cache_friction_power_ = d.F_T * op.c.v_t;
     }
     Eigen::Map<Vec7> yd_q(yd), yd_v(yd + kNumDofs);
     yd_q = v;
@@ -128,12 +134,14 @@ class Integrator {
     return 0;
   }
 
-  /// Projects an interpolated state of a contact phase onto the constraints (as at step ends).
-  void project_state(double t, Vec7& q, Vec7& v) const {
-    project_position(t, q, v);
-    ContactOperators op;
+  /// Projects a state of a contact phase onto the constraints (positions onto d_N = 0,
+  /// velocities mass-weighted onto v_N = 0, and v_t = 0 in stick) and returns the contact
+  /// operators at the projected state: one LDLT.
+  void project_state(double t, Vec7& q, Vec7& v, ContactOperators& op) const {
+    project_position(q, v);
     compute_contact_operators(m_, t, q, v, op);
     project_velocity(op, phase_ == Phase::Stick ? 2 : 1, v);
+    update_contact_velocity(m_, t, q, v, op);
   }
 
   int eval_roots(double t, const double* y, double* g) {
@@ -141,7 +149,12 @@ class Integrator {
     split(y, q, v);
     // Witnesses of a contact phase are functions on the constraint manifold: evaluate them at
     // the projected state (the interpolant between step ends is not projected).
-    if (phase_ != Phase::Free) project_state(t, q, v);
+    ContactOperators op;
+    PhaseDynamics dyn;
+    if (phase_ != Phase::Free) {
+      project_state(t, q, v, op);
+      dyn = phase_dynamics(op, phase_, law_.mu);
+    }
     int k = 0;
     for (Witness w : witnesses_) {
       switch (w) {
@@ -156,21 +169,17 @@ class Integrator {
           break;
         }
         case Witness::NormalForce:
+          g[k] = dyn.F_N / F_ref_;
+          break;
         case Witness::ConeUpper:
-        case Witness::ConeLower: {
-          ContactOperators op;
-          compute_contact_operators(m_, t, q, v, op);
-          const PhaseDynamics d = phase_dynamics(op, phase_, law_.mu);
-          g[k] = w == Witness::NormalForce
-                     ? d.F_N / F_ref_
-                     : (law_.mu * d.F_N + (w == Witness::ConeUpper ? -d.F_T : d.F_T)) / F_ref_;
+          g[k] = (law_.mu * dyn.F_N - dyn.F_T) / F_ref_;
           break;
-        }
-        case Witness::SlipSpeed: {
-          const ContactKinematics c = m_.contact(q, v);
-          g[k] = c.v_t / v_ref_;
+        case Witness::ConeLower:
+          g[k] = (law_.mu * dyn.F_N + dyn.F_T) / F_ref_;
           break;
-        }
+        case Witness::SlipSpeed:
+          g[k] = op.c.v_t / v_ref_;
+          break;
         case Witness::Omega:
           g[k] = (v[TH] - opt_.omega_lim) / opt_.omega_lim;
           break;
@@ -186,7 +195,8 @@ class Integrator {
     Vec7 q, v;
     split(y, q, v);
     const Vec7 q0 = q, v0 = v;
-    project_state(t, q, v);
+    ContactOperators op;
+    project_state(t, q, v, op);
     Eigen::Map<Vec7> corr_q(corr), corr_v(corr + kNumDofs);
     corr_q = q - q0;
     corr_v = v - v0;
@@ -201,10 +211,14 @@ class Integrator {
     qd[1] = p.damping;
     qd[2] = 0.0;
     if (phase_ == Phase::SlipPos || phase_ == Phase::SlipNeg) {
-      ContactOperators op;
-      compute_contact_operators(m_, t, q, v, op);
-      const PhaseDynamics d = phase_dynamics(op, phase_, law_.mu);
-      qd[2] = d.F_T * op.c.v_t;
+      if (t == cache_t_ && Eigen::Map<const Vec14>(y) == cache_y_) {
+        qd[2] = cache_friction_power_;
+      } else {
+        ContactOperators op;
+        compute_contact_operators(m_, t, q, v, op);
+        const PhaseDynamics d = phase_dynamics(op, phase_, law_.mu);
+        qd[2] = d.F_T * op.c.v_t;
+      }
     }
     return 0;
   }
@@ -229,12 +243,17 @@ class Integrator {
     state_from(y, s.q, s.v);
     // Dense output inside a contact phase is CVODE's interpolant, which is not projected:
     // project it like a step end, so that every output state satisfies the constraints.
-    if (phase_ != Phase::Free) project_state(t, s.q, s.v);
+    if (phase_ != Phase::Free) {
+      ContactOperators op;
+      project_state(t, s.q, s.v, op);
+      const PhaseDynamics d = phase_dynamics(op, phase_, law_.mu);
+      s.F_N = d.F_N;
+      s.F_T = d.F_T;
+    }
     const ContactKinematics c = m_.contact(s.q, s.v);
     s.d_N = c.d_N;
     s.v_N = c.v_N;
     s.v_t = c.v_t;
-    forces(t, s.q, s.v, s.F_N, s.F_T);
     s.phase = phase_;
     mon_.observe(t, s.v[TH], s.d_N, s.v_N, s.F_N, s.F_T, phase_ != Phase::Free);
     sink_.sample(s);
@@ -289,13 +308,15 @@ class Integrator {
               phase_ != Phase::Free, 0.0, t_end_);
   }
 
-  /// Mass-weighted Newton steps putting q exactly on d_N = 0 (a change of the order of the
-  /// root-finding tolerance at events; of round-off in projections).
-  void project_position(double t, Vec7& q, const Vec7& v) const {
-    ContactOperators op;
-    for (int it = 0; it < 2; ++it) {
-      compute_contact_operators(m_, t, q, v, op);
-      q -= op.Minv_WN * (op.c.d_N / op.A_NN);
+  /// Puts q on d_N = 0 by a step along W_N (Euclidean metric): q <- q - W_N d_N / |W_N|^2.
+  /// For the circular clearance this moves the rotor and stator centres apart along the normal
+  /// and is exact in one step; for any model it is a Newton step, repeated while it matters.
+  void project_position(Vec7& q, const Vec7& v) const {
+    for (int it = 0; it < 3; ++it) {
+      const ContactKinematics c = m_.contact(q, v);
+      // 1e-14 g0 is 100x below the drift bound we promise (1e-12 g0), 1e6x above round-off
+      if (!c.normal_defined || std::abs(c.d_N) <= 1e-14 * g0_) return;
+      q -= c.W_N * (c.d_N / c.W_N.squaredNorm());
     }
   }
 
@@ -339,6 +360,8 @@ class Integrator {
   Vec14 y_restart_ = Vec14::Zero();
   bool omega_pending_ = false;
   bool gap_rate_deferred_ = false;
+  double cache_t_ = std::numeric_limits<double>::quiet_NaN(), cache_friction_power_ = 0.0;
+  Vec14 cache_y_ = Vec14::Zero();
   Phase phase_ = Phase::Free;
   std::vector<Witness> witnesses_;
   std::vector<int> dirs_;
@@ -370,7 +393,7 @@ bool Integrator::on_gap_closing(double t, Vec14 y, bool missed_crossing) {
   works_at(t);
   end_phase(t);
   state_from(y, q, v);
-  project_position(t, q, v);
+  project_position(q, v);
   ContactOperators op;
   compute_contact_operators(m_, t, q, v, op);
   y.head<kNumDofs>() = q;
@@ -449,7 +472,7 @@ bool Integrator::on_gap_closing(double t, Vec14 y, bool missed_crossing) {
 bool Integrator::switch_on_constraint(double t, Vec14 y, EventRecord e, double rel_tol) {
   Vec7 q, v;
   state_from(y, q, v);
-  project_position(t, q, v);
+  project_position(q, v);
   y.head<kNumDofs>() = q;
   ContactOperators op;
   compute_contact_operators(m_, t, q, v, op);

@@ -14,6 +14,7 @@
 // Impact map (v_N- < 0): Newton's law v_N+ = -e_n v_N- with a Coulomb frictional impulse:
 // first the sticking impulse (v_t+ = -e_t v_t-); if it leaves the cone, the sliding impulse
 // P_T = sigma mu P_N in the direction sigma the sticking impulse wanted. Exact for one contact.
+#include <Eigen/Cholesky>
 #include <string>
 
 #include "rubdyn/core/run_types.hpp"
@@ -24,6 +25,7 @@ namespace rubdyn {
 /// M^{-1} applied to f, W_N and W_T, and the quantities every phase needs; computed once per
 /// evaluation (one LDLT of the 7x7 mass matrix, no allocation).
 struct ContactOperators {
+  Eigen::LDLT<Mat7> ldlt;  ///< factorisation of M(q), reused when only v changes
   ContactKinematics c;
   Vec7 Minv_f, Minv_WN, Minv_WT;
   double A_NN = 0, A_NT = 0, A_TT = 0;  ///< Delassus matrix entries
@@ -31,6 +33,10 @@ struct ContactOperators {
 };
 void compute_contact_operators(const LagrangianModel& m, double t, const Vec7& q, const Vec7& v,
                                ContactOperators& op);
+/// Updates the velocity-dependent parts (kinematic rates, M^{-1} f, b) for a new v at the same
+/// q, reusing the factorisation: no new LDLT.
+void update_contact_velocity(const LagrangianModel& m, double t, const Vec7& q, const Vec7& v,
+                             ContactOperators& op);
 
 struct PhaseDynamics {
   Vec7 a = Vec7::Zero();
