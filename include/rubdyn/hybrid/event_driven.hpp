@@ -19,6 +19,15 @@
 // extrapolated accumulation time). A bound on events per simulated second ends chattering runs.
 // Output: dense samples on the output grid (CV_NORMAL interpolation: the output interval never
 // changes the steps), plus samples before and after each event.
+//
+// What a scene does not need is not built (event_driven.cpp):
+//   - mu = 0: no tangential witness and no stick mode (build_witnesses; select_mode in
+//     contact_problem.cpp has no stick candidate without friction);
+//   - a scene that never closes the gap never builds a contact phase: the free-flight right-hand
+//     side uses only M and f (eval_rhs), contact operators exist only in contact phases;
+//   - e_n = 0 never enters accumulation handling (on_gap_closing: law_.has_restitution());
+//   - output thinning costs no solver work: samples are interpolated (CV_NORMAL), never stepped to;
+//   - omega_lim's witness is removed once crossed (main loop).
 #include <functional>
 
 #include "rubdyn/core/run_types.hpp"
