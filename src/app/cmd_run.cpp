@@ -1,9 +1,119 @@
-// rubdyn run: placeholder until implemented.
+// rubdyn run CASE: one run of the rotor-stator case with the event-driven integrator (default)
+// or a fixed-step scheme, written to an output folder.
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
 #include "commands.hpp"
+#include "rubdyn/core/report.hpp"
+#include "rubdyn/hybrid/event_driven.hpp"
+#include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/output_folder.hpp"
+#include "rubdyn/model/rotor_stator_model.hpp"
+#include "rubdyn/stepping/fixed_step.hpp"
 
 namespace rubdyn::app {
-void add_run_command(CLI::App& app, Action& action) {
-  auto* sub = app.add_subcommand("run", "not implemented yet");
-  sub->callback([&action] { action = [] { return 2; }; });
+
+namespace {
+
+struct RunArgs {
+  std::string case_path;
+  std::vector<std::string> sets;
+  // kept as text: they become overrides of case keys and are validated (and reported) as such
+  std::string solver, method, out, rtol, atol, t_end, h, output_every;
+  bool quiet = false;
+};
+
+int run_command(const RunArgs& a) {
+  // Command-line solver options are overrides of the case's keys: validated like the file.
+  std::vector<std::string> sets = a.sets;
+  if (!a.solver.empty()) sets.push_back("solver.kind=" + a.solver);
+  if (!a.method.empty()) sets.push_back("solver.method=" + a.method);
+  if (!a.rtol.empty()) sets.push_back("solver.rtol=" + a.rtol);
+  if (!a.atol.empty()) sets.push_back("solver.atol=" + a.atol);
+  if (!a.h.empty()) sets.push_back("solver.h=" + a.h);
+  if (!a.t_end.empty()) sets.push_back("run.t_end=" + a.t_end);
+  if (!a.output_every.empty()) sets.push_back("output.every=" + a.output_every);
+  if (!a.out.empty()) sets.push_back("output.folder=\"" + a.out + "\"");
+  const CaseSpec spec = load_case(a.case_path, sets);  // throws CaseError: exit 2, nothing written
+
+  const RotorStatorModel model(spec.params);
+  MechanicalState s0;
+  s0.q = spec.initial.q0;
+  s0.v = spec.initial.v0;
+
+  const std::string dir = output_folder(spec);
+  OutputFolder sink(dir, spec);
+
+  const bool show_progress = !a.quiet && isatty(fileno(stderr));
+  auto last = std::chrono::steady_clock::now();
+  auto progress = [&](double t, long events, double omega, Phase phase) {
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last < std::chrono::milliseconds(100)) return;
+    last = now;
+    std::fprintf(stderr, "\r  t = %.6f s  events %ld  omega %.3f rad/s  phase %-6s", t, events,
+                 omega, std::string(to_string(phase)).c_str());
+    std::fflush(stderr);
+  };
+
+  RunSummary summary;
+  if (spec.solver.kind == "event") {
+    EventDrivenOptions opt;
+    opt.rtol = spec.solver.rtol;
+    opt.atol = spec.solver.atol;
+    opt.adams = spec.solver.method == "adams";
+    opt.output_dt = spec.output.dt;
+    opt.omega_lim = spec.run.omega_lim;
+    opt.max_events_per_second = spec.solver.max_events_per_second;
+    if (show_progress) opt.progress = progress;
+    summary = run_event_driven(model, s0, spec.run.t_end, opt, sink);
+  } else {
+    FixedStepOptions opt;
+    if (!parse_fixed_step_scheme(spec.solver.kind, opt.scheme)) {
+      throw std::runtime_error("unknown solver kind " + spec.solver.kind);
+    }
+    opt.h = spec.solver.h;
+    opt.itmax = spec.solver.itmax;
+    opt.qn_tol = spec.solver.qn_tol;
+    opt.theta = spec.solver.theta;
+    opt.eta = spec.solver.eta;
+    opt.output_every = spec.output.every;
+    opt.output_dt = spec.output.dt;
+    opt.omega_lim = spec.run.omega_lim;
+    summary = run_fixed_step(model, s0, spec.run.t_end, opt, sink);
+  }
+  if (show_progress) std::fprintf(stderr, "\r%80s\r", "");
+  std::printf("%s", brief_report(summary).c_str());
+  std::printf("output        %s/\n", dir.c_str());
+  if (!summary.complete()) {
+    std::fprintf(stderr, "rubdyn run: ended early (%s): %s\n",
+                 std::string(to_string(summary.termination)).c_str(), summary.message.c_str());
+  }
+  return exit_code(summary.termination);
 }
+
+}  // namespace
+
+void add_run_command(CLI::App& app, Action& action) {
+  auto a = std::make_shared<RunArgs>();
+  auto* sub = app.add_subcommand("run", "Run a case and write its output folder");
+  sub->add_option("case", a->case_path, "Case file (TOML)")->required();
+  sub->add_option("--solver", a->solver, "event | carp-onevc | carp-qn | mj | mj-proj");
+  sub->add_option("--method", a->method, "event solver, free flight: bdf | adams");
+  sub->add_option("--rtol", a->rtol, "event solver: relative tolerance");
+  sub->add_option("--atol", a->atol, "event solver: absolute tolerance on positions [m]");
+  sub->add_option("--h", a->h, "fixed-step schemes: time step [s]");
+  sub->add_option("--output-every", a->output_every, "fixed-step schemes: write every N-th step");
+  sub->add_option("--t-end", a->t_end, "end time [s] (overrides run.t_end)");
+  sub->add_option("--out", a->out, "output folder (default out/<case name>)");
+  sub->add_option("--set", a->sets, "override a case key: section.key=value (repeatable)");
+  sub->add_flag("--quiet", a->quiet, "no progress line");
+  sub->callback([a, &action] { action = [a] { return run_command(*a); }; });
+}
+
 }  // namespace rubdyn::app
