@@ -161,7 +161,9 @@ class Loader {
     c.name = std::filesystem::path(source_).stem().string();
     check_structure(doc, c);
     read_values(doc, c);
-    if (issues_.empty()) check_rules(c);
+    // Rules run even when other keys have problems, so that every problem is reported at once.
+    // A key that is missing or of the wrong type keeps its (valid) default and so adds nothing.
+    check_rules(c);
     if (!issues_.empty()) throw CaseError(issues_);
     return c;
   }

@@ -1,0 +1,64 @@
+// The command-line program: exit codes, nothing written on bad input, the main job's outputs.
+#include <catch2/catch.hpp>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <sys/wait.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+int run(const std::string& args) {
+  const std::string cmd = std::string(RUBDYN_CLI) + " " + args + " > /dev/null 2>&1";
+  const int st = std::system(cmd.c_str());
+  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+fs::path fresh_dir(const std::string& tag) {
+  const fs::path d = fs::temp_directory_path() /
+                     ("rubdyn-cli-" + tag + "-" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  return d;
+}
+const std::string kRef = std::string(RUBDYN_SOURCE_DIR) + "/cases/reference.toml";
+}  // namespace
+
+TEST_CASE("CLI: usage errors and bad input exit with 2 and write nothing", "[cli]") {
+  const fs::path dir = fresh_dir("bad");
+  CHECK(run("") == 2);
+  CHECK(run("frobnicate") == 2);
+  CHECK(run("run /nonexistent.toml --out " + dir.string()) == 2);
+  CHECK(run("run " + kRef + " --set contact.mu=-1 --out " + dir.string()) == 2);
+  CHECK(run("run " + kRef + " --rtol abc --out " + dir.string()) == 2);
+  CHECK_FALSE(fs::exists(dir));
+  CHECK(run("--help") == 0);
+  CHECK(run("run --help") == 0);
+}
+
+TEST_CASE("CLI: a short event-driven run writes its output folder and exits 0", "[cli]") {
+  const fs::path dir = fresh_dir("run");
+  REQUIRE(run("run " + kRef + " --t-end 0.01 --quiet --out " + dir.string()) == 0);
+  for (const char* f : {"timeseries.csv", "events.csv", "summary.json", "case.resolved.toml"})
+    CHECK(fs::exists(dir / f));
+  std::ifstream in(dir / "summary.json");
+  std::stringstream s;
+  s << in.rdbuf();
+  CHECK(s.str().find("\"complete\": true") != std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("CLI: a run ended early by numerical trouble exits 3 and keeps its output", "[cli]") {
+  // 64 events in less than 64 / max_events_per_second seconds of simulated time: chattering.
+  // With e_n = 0.9 the rotor bounces (about 230 impacts in 0.1 s): a bound of 100 events per
+  // second trips as soon as 64 events fall within 0.64 s, i.e. at the 64th event.
+  const fs::path dir = fresh_dir("early");
+  CHECK(run("run " + kRef + " --set contact.e_n=0.9 --t-end 0.1" +
+            " --set solver.max_events_per_second=100 --quiet --out " + dir.string()) == 3);
+  std::ifstream in(dir / "summary.json");
+  std::stringstream s;
+  s << in.rdbuf();
+  CHECK(s.str().find("\"complete\": false") != std::string::npos);
+  CHECK(s.str().find("\"termination\": \"chattering\"") != std::string::npos);
+  CHECK(fs::file_size(dir / "timeseries.csv") > 1000);
+  fs::remove_all(dir);
+}
