@@ -62,3 +62,21 @@ TEST_CASE("CLI: a run ended early by numerical trouble exits 3 and keeps its out
   CHECK(fs::file_size(dir / "timeseries.csv") > 1000);
   fs::remove_all(dir);
 }
+
+TEST_CASE("CLI: campbell writes campbell.csv; check prints; bad options exit 2", "[cli]") {
+  const fs::path dir = fresh_dir("campbell");
+  REQUIRE(run("campbell " + kRef + " --points 11 --out " + dir.string()) == 0);
+  std::ifstream in(dir / "campbell.csv");
+  std::string header;
+  std::getline(in, header);
+  CHECK(header == "omega_rad_s,omega_rpm,f1b,f1f,f2b,f2f");
+  int rows = 0;
+  for (std::string l; std::getline(in, l);) ++rows;
+  CHECK(rows == 11);
+  fs::remove_all(dir);
+  CHECK(run("campbell " + kRef + " --points 1 --out " + dir.string()) == 2);
+  CHECK(run("campbell /nonexistent.toml --out " + dir.string()) == 2);
+  CHECK_FALSE(fs::exists(dir));
+  CHECK(run("check " + kRef) == 0);
+  CHECK(run("check " + kRef + " --set rotor.delta=0.6") == 2);
+}
