@@ -1,10 +1,11 @@
 #include "rubdyn/analysis/campbell.hpp"
 
+#include <fmt/format.h>
+
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <complex>
-#include <fmt/format.h>
 #include <numbers>
 
 #include "rubdyn/model/rotor_stator_model.hpp"

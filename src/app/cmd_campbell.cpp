@@ -28,8 +28,7 @@ int campbell_command(const CampbellArgs& a) {
   if (a.points < 2)
     bad.push_back({"--points", 0, "--points", std::to_string(a.points), "must be >= 2"});
   if (!(a.omega_max >= 0.0))
-    bad.push_back({"--omega-max", 0, "--omega-max", fmt::format("{}", a.omega_max),
-                   "must be > 0"});
+    bad.push_back({"--omega-max", 0, "--omega-max", fmt::format("{}", a.omega_max), "must be > 0"});
   if (!bad.empty()) throw CaseError(bad);
   const CaseSpec spec = load_case(a.case_path, a.sets);
   const double omega_max = a.omega_max > 0.0 ? a.omega_max : spec.run.omega_lim;

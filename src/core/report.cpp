@@ -1,7 +1,8 @@
 #include "rubdyn/core/report.hpp"
 
-#include <cmath>
 #include <fmt/format.h>
+
+#include <cmath>
 
 namespace rubdyn {
 
@@ -17,7 +18,8 @@ std::string brief_report(const RunSummary& s) {
                    s.steps, s.rhs_evals, s.jac_evals, s.root_evals, s.newton_iters));
   std::string ev;
   for (int k = 0; k < kNumEventKinds; ++k)
-    if (s.events[k] > 0) ev += fmt::format("{} {}, ", to_string(static_cast<EventKind>(k)), s.events[k]);
+    if (s.events[k] > 0)
+      ev += fmt::format("{} {}, ", to_string(static_cast<EventKind>(k)), s.events[k]);
   if (ev.empty()) ev = "none  ";
   line("events        " + ev.substr(0, ev.size() - 2));
   const double span = s.t_reached - s.t_start;
@@ -30,14 +32,16 @@ std::string brief_report(const RunSummary& s) {
                    s.omega_max, s.omega_final,
                    std::isnan(s.t_omega_lim) ? std::string("never")
                                              : fmt::format("at {:.9g} s", s.t_omega_lim)));
-  line(fmt::format("invariants    penetration {:.3g} m, min F_N {:.3g} N, cone excess {:.3g}, "
-                   "drift {:.3g} m / {:.3g} m/s",
-                   s.max_penetration, s.min_F_N_in_contact, s.max_cone_violation,
-                   s.max_drift_position, s.max_drift_velocity));
-  line(fmt::format("energy        dE {:.9g} J = torque {:.9g} + dampers {:.6g} + friction {:.6g} "
-                   "+ impacts {:.6g} + residual {:.3g} J",
-                   s.energy_final - s.energy_initial, s.work_torque, s.work_damping,
-                   s.work_friction, s.work_impacts, s.energy_residual));
+  line(
+      fmt::format("invariants    penetration {:.3g} m, min F_N {:.3g} N, cone excess {:.3g}, "
+                  "drift {:.3g} m / {:.3g} m/s",
+                  s.max_penetration, s.min_F_N_in_contact, s.max_cone_violation,
+                  s.max_drift_position, s.max_drift_velocity));
+  line(
+      fmt::format("energy        dE {:.9g} J = torque {:.9g} + dampers {:.6g} + friction {:.6g} "
+                  "+ impacts {:.6g} + residual {:.3g} J",
+                  s.energy_final - s.energy_initial, s.work_torque, s.work_damping, s.work_friction,
+                  s.work_impacts, s.energy_residual));
   return r;
 }
 

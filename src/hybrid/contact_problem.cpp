@@ -1,8 +1,9 @@
 #include "rubdyn/hybrid/contact_problem.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
-#include <fmt/format.h>
 
 namespace rubdyn {
 
@@ -148,8 +149,8 @@ ModeDecision select_mode(const ContactOperators& op, double mu, double v_t_eps, 
     out.painleve = true;
     out.phase = Phase::Free;
     out.dyn = cands[0].dyn;
-    out.note = fmt::format("no consistent contact mode (b_N = {:.6g}, v_t = {:.6g})", op.b_N,
-                           op.c.v_t);
+    out.note =
+        fmt::format("no consistent contact mode (b_N = {:.6g}, v_t = {:.6g})", op.b_N, op.c.v_t);
     return out;
   }
   int pick = first_strict;
@@ -189,8 +190,9 @@ ImpactResult impact_map(const ContactOperators& op, const Vec7& v_minus, const C
   if (!stick) {
     // Sliding impulse P_T = sigma mu P_N, sigma = direction the sticking impulse wanted
     // (opposite to the tangential velocity when the stick solution is not available).
-    const double sigma = law.mu == 0.0 ? 0.0 : (det > 0.0 && PT != 0.0 ? (PT > 0 ? 1.0 : -1.0)
-                                                                        : (vt > 0 ? -1.0 : 1.0));
+    const double sigma =
+        law.mu == 0.0 ? 0.0
+                      : (det > 0.0 && PT != 0.0 ? (PT > 0 ? 1.0 : -1.0) : (vt > 0 ? -1.0 : 1.0));
     const double mass = op.A_NN + sigma * law.mu * op.A_NT;
     if (!(mass > 0.0)) {
       r.ok = false;

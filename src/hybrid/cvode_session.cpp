@@ -17,8 +17,8 @@ namespace {
 
 void check(int flag, const char* what) {
   if (flag < 0) {
-    throw std::runtime_error(std::string("CVODE: ") + what + " failed: " +
-                             CVodeGetReturnFlagName(flag));
+    throw std::runtime_error(std::string("CVODE: ") + what +
+                             " failed: " + CVodeGetReturnFlagName(flag));
   }
 }
 

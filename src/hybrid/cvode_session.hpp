@@ -1,7 +1,8 @@
 #pragma once
-// CvodeSession: RAII over one CVODES integrator (SUNDIALS 6.4.1: CVODE plus quadratures) with dense linear algebra, root
-// finding, optional projection and quadratures. This file and cvode_session.cpp are the ONLY
-// ones that include SUNDIALS headers; SUNDIALS return flags become exceptions or statuses here.
+// CvodeSession: RAII over one CVODES integrator (SUNDIALS 6.4.1: CVODE plus quadratures) with dense
+// linear algebra, root finding, optional projection and quadratures. This file and
+// cvode_session.cpp are the ONLY ones that include SUNDIALS headers; SUNDIALS return flags become
+// exceptions or statuses here.
 //
 // The problem is given as plain callbacks on double arrays (y of size n, quadratures of size nq)
 // with a user pointer; a callback returns 0 on success, > 0 for a recoverable failure (CVODE

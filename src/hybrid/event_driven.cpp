@@ -1,12 +1,13 @@
 #include "rubdyn/hybrid/event_driven.hpp"
 
+#include <fmt/format.h>
+
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
-#include <fmt/format.h>
 #include <limits>
 #include <memory>
 #include <stdexcept>
@@ -168,21 +169,11 @@ class Integrator {
           g[k] = c.v_N / v_ref_;
           break;
         }
-        case Witness::NormalForce:
-          g[k] = dyn.F_N / F_ref_;
-          break;
-        case Witness::ConeUpper:
-          g[k] = (law_.mu * dyn.F_N - dyn.F_T) / F_ref_;
-          break;
-        case Witness::ConeLower:
-          g[k] = (law_.mu * dyn.F_N + dyn.F_T) / F_ref_;
-          break;
-        case Witness::SlipSpeed:
-          g[k] = op.c.v_t / v_ref_;
-          break;
-        case Witness::Omega:
-          g[k] = (v[TH] - opt_.omega_lim) / opt_.omega_lim;
-          break;
+        case Witness::NormalForce: g[k] = dyn.F_N / F_ref_; break;
+        case Witness::ConeUpper: g[k] = (law_.mu * dyn.F_N - dyn.F_T) / F_ref_; break;
+        case Witness::ConeLower: g[k] = (law_.mu * dyn.F_N + dyn.F_T) / F_ref_; break;
+        case Witness::SlipSpeed: g[k] = op.c.v_t / v_ref_; break;
+        case Witness::Omega: g[k] = (v[TH] - opt_.omega_lim) / opt_.omega_lim; break;
       }
       ++k;
     }
@@ -347,7 +338,9 @@ class Integrator {
   // Event handlers return false when the run must end.
   bool on_gap_closing(double t, Vec14 y, bool missed_crossing);
   bool switch_on_constraint(double t, Vec14 y, EventRecord e, double rel_tol);
-  bool on_contact_witness(double t, const Vec14& y, Witness w);
+  bool on_contact_witness(double t_root, const Vec14& y_root, Witness w);
+  /// Value of a contact-phase witness (unscaled) at an interpolated state.
+  double witness_value(Witness w, double t, const Vec14& y) const;
 
   const LagrangianModel& m_;
   const EventDrivenOptions& opt_;
@@ -355,7 +348,8 @@ class Integrator {
   const ContactLaw law_;
   RunMonitor mon_;
   RunSummary sum_;
-  double g0_ = 1, atol_q_ = 0, atol_v_ = 0, v_tol_ = 0, graze_tol_ = 0, graze_band_ = 0, v_ref_ = 1, F_ref_ = 1;
+  double g0_ = 1, atol_q_ = 0, atol_v_ = 0, v_tol_ = 0, graze_tol_ = 0, graze_band_ = 0, v_ref_ = 1,
+         F_ref_ = 1;
   double t_end_ = 0, phase_start_ = 0, t_restart_ = 0;
   Vec14 y_restart_ = Vec14::Zero();
   bool omega_pending_ = false;
@@ -507,7 +501,44 @@ bool Integrator::switch_on_constraint(double t, Vec14 y, EventRecord e, double r
   return true;
 }
 
-bool Integrator::on_contact_witness(double t, const Vec14& y, Witness w) {
+double Integrator::witness_value(Witness w, double t, const Vec14& y) const {
+  Vec7 q, v;
+  state_from(y, q, v);
+  ContactOperators op;
+  project_state(t, q, v, op);
+  const PhaseDynamics d = phase_dynamics(op, phase_, law_.mu);
+  switch (w) {
+    case Witness::NormalForce: return d.F_N;
+    case Witness::ConeUpper: return law_.mu * d.F_N - d.F_T;
+    case Witness::ConeLower: return law_.mu * d.F_N + d.F_T;
+    case Witness::SlipSpeed: return op.c.v_t;
+    default: return 0.0;
+  }
+}
+
+bool Integrator::on_contact_witness(double t_root, const Vec14& y_root, Witness w) {
+  // CVODE reports the root just past the sign change. Move the event to the last time at which
+  // the witness still has its phase's sign (bisection on the projected interpolant to a few
+  // ulps), so that the state logged before the event is a valid state of the ending phase
+  // (F_N >= 0 before a lift-off, |F_T| <= mu F_N before a stick-to-slip switch).
+  double t = t_root;
+  Vec14 y = y_root;
+  {
+    double lo = cur_->current_time() - cur_->last_step(), hi = t_root;
+    Vec14 yl;
+    cur_->dky(lo, 0, yl.data());
+    const double g_lo = witness_value(w, lo, yl);
+    if (g_lo != 0.0 && g_lo * witness_value(w, hi, y_root) <= 0.0) {
+      for (int it = 0; it < 200 && hi - lo > 4e-16 * std::max(1.0, std::abs(hi)); ++it) {
+        const double mid = 0.5 * (lo + hi);
+        Vec14 ym;
+        cur_->dky(mid, 0, ym.data());
+        (witness_value(w, mid, ym) * g_lo > 0.0 ? lo : hi) = mid;
+      }
+      t = lo;
+      cur_->dky(t, 0, y.data());
+    }
+  }
   works_at(t);
   end_phase(t);
   Vec7 q, v;
@@ -555,9 +586,9 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
     free_ = std::make_unique<detail::CvodeSession>(
         kN, kNq, opt_.adams ? detail::CvodeMethod::Adams : detail::CvodeMethod::BDF, opt_.rtol,
         atol.data(), qatol.data(), cb_free, opt_.max_steps_per_phase);
-    contact_ = std::make_unique<detail::CvodeSession>(kN, kNq, detail::CvodeMethod::BDF,
-                                                      opt_.rtol, atol.data(), qatol.data(),
-                                                      cb_contact, opt_.max_steps_per_phase);
+    contact_ = std::make_unique<detail::CvodeSession>(kN, kNq, detail::CvodeMethod::BDF, opt_.rtol,
+                                                      atol.data(), qatol.data(), cb_contact,
+                                                      opt_.max_steps_per_phase);
   } catch (const std::exception& ex) {
     fail(Termination::SolverFailure, ex.what());
     sink_.end(sum_);
@@ -608,9 +639,8 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
       const auto st = cur_->advance(tout, t, y.data(), arming);
       if (st == detail::CvodeSession::Status::Failure) {
         t = cur_->current_time();
-        fail(Termination::SolverFailure,
-             fmt::format("CVODE failed at t = {:.17g} in phase {}: {}", t, to_string(phase_),
-                         cur_->last_error()));
+        fail(Termination::SolverFailure, fmt::format("CVODE failed at t = {:.17g} in phase {}: {}",
+                                                     t, to_string(phase_), cur_->last_error()));
         break;
       }
       if (!y.allFinite()) {
@@ -627,7 +657,8 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
       if (st == detail::CvodeSession::Status::Reached) {
         emit_sample(t, y);
         if (opt_.progress) opt_.progress(t, n_events_, y[kNumDofs + TH], phase_);
-        if (t >= tout && tout == next_out) next_out = init.t + static_cast<double>(++k_out) * opt_.output_dt;
+        if (t >= tout && tout == next_out)
+          next_out = init.t + static_cast<double>(++k_out) * opt_.output_dt;
         continue;
       }
       // Root return: find what fired.
@@ -686,7 +717,9 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
               log_event(e);
               last_event_t_ = t;
               if (chattering(t)) {
-                fail(Termination::Chattering, fmt::format("event rate above {:.3g} per second at t = {:.17g}", opt_.max_events_per_second, t));
+                fail(Termination::Chattering,
+                     fmt::format("event rate above {:.3g} per second at t = {:.17g}",
+                                 opt_.max_events_per_second, t));
                 ok = false;
               }
               continue;
@@ -754,9 +787,9 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
   sum_.work_damping = work_[1];
   sum_.work_friction = work_[2];
   sum_.work_impacts = work_impacts_;
-  sum_.energy_residual = (sum_.energy_final - sum_.energy_initial) -
-                         (sum_.work_torque + sum_.work_damping + sum_.work_friction +
-                          sum_.work_impacts);
+  sum_.energy_residual =
+      (sum_.energy_final - sum_.energy_initial) -
+      (sum_.work_torque + sum_.work_damping + sum_.work_friction + sum_.work_impacts);
   mon_.fill(sum_);
   const auto st = free_ ? free_->stats() : detail::CvodeStats{};
   const auto sc = contact_ ? contact_->stats() : detail::CvodeStats{};

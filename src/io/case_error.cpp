@@ -11,8 +11,8 @@ std::string format_issue(const CaseIssue& i) {
 }
 
 static std::string join_issues(const std::vector<CaseIssue>& issues) {
-  std::string s = fmt::format("invalid case: {} problem{}", issues.size(),
-                              issues.size() == 1 ? "" : "s");
+  std::string s =
+      fmt::format("invalid case: {} problem{}", issues.size(), issues.size() == 1 ? "" : "s");
   for (const auto& i : issues) s += "\n  " + format_issue(i);
   return s;
 }

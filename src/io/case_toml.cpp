@@ -1,18 +1,18 @@
 // Case files: TOML -> CaseSpec with complete validation, and CaseSpec -> TOML.
 // The only file of the project that includes the TOML parser.
 #include <fmt/format.h>
+#include <toml++/toml.h>
 
 #include <algorithm>
 #include <cerrno>
-#include <cstring>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <map>
 #include <set>
 #include <sstream>
-#include <toml++/toml.h>
 
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
@@ -29,15 +29,16 @@ struct KeySpec {
   const char* key;
   Kind kind;
   bool required;
-  std::function<double*(CaseSpec&)> num;       // Number
-  std::function<int*(CaseSpec&)> integer;      // Integer
-  std::function<std::string*(CaseSpec&)> text; // String
+  std::function<double*(CaseSpec&)> num;        // Number
+  std::function<int*(CaseSpec&)> integer;       // Integer
+  std::function<std::string*(CaseSpec&)> text;  // String
 };
 
 const std::vector<KeySpec>& schema() {
   static const std::vector<KeySpec> s = [] {
     std::vector<KeySpec> v;
-    auto num = [&v](const char* sec, const char* key, bool req, std::function<double*(CaseSpec&)> f) {
+    auto num = [&v](const char* sec, const char* key, bool req,
+                    std::function<double*(CaseSpec&)> f) {
       v.push_back({sec, key, Kind::Number, req, std::move(f), {}, {}});
     };
     auto integer = [&v](const char* sec, const char* key, std::function<int*(CaseSpec&)> f) {
@@ -93,8 +94,8 @@ const std::vector<KeySpec>& schema() {
 }
 
 const std::vector<std::string>& section_names() {
-  static const std::vector<std::string> s = {"rotor", "bearing", "stator", "contact", "loads",
-                                             "initial", "run", "solver", "output"};
+  static const std::vector<std::string> s = {"rotor",   "bearing", "stator", "contact", "loads",
+                                             "initial", "run",     "solver", "output"};
   return s;
 }
 
@@ -224,8 +225,7 @@ class Loader {
         }
         continue;
       }
-      if (std::find(section_names().begin(), section_names().end(), key) ==
-          section_names().end()) {
+      if (std::find(section_names().begin(), section_names().end(), key) == section_names().end()) {
         auto sections = section_names();
         sections.push_back("name");
         issue(key, &node, "", "unknown section" + suggestion(key, sections));
@@ -242,8 +242,7 @@ class Loader {
       for (const auto& [kk, vv] : *sec) {
         const std::string name(kk.str());
         if (std::find(known.begin(), known.end(), name) == known.end()) {
-          issue(key + "." + name, &vv, node_text(vv),
-                "unknown key" + suggestion(name, known));
+          issue(key + "." + name, &vv, node_text(vv), "unknown key" + suggestion(name, known));
         }
       }
     }
@@ -351,8 +350,7 @@ class Loader {
             "must be one of event, carp-onevc, carp-qn, mj, mj-proj" + suggestion(so.kind, kinds));
     }
     if (so.method != "bdf" && so.method != "adams") {
-      issue("solver.method", at("solver.method"), "\"" + so.method + "\"",
-            "must be bdf or adams");
+      issue("solver.method", at("solver.method"), "\"" + so.method + "\"", "must be bdf or adams");
     }
     rule(so.rtol > 0, "solver.rtol", so.rtol, "must be > 0");
     rule(so.atol > 0, "solver.atol", so.atol, "must be > 0");
@@ -402,8 +400,8 @@ CaseSpec parse_case(std::string_view toml_text, const std::string& source,
 CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {
-    throw CaseError({{path, 0, "(file)", "", std::string("cannot read the case file: ") +
-                                                 std::strerror(errno)}});
+    throw CaseError({{path, 0, "(file)", "",
+                      std::string("cannot read the case file: ") + std::strerror(errno)}});
   }
   std::ostringstream ss;
   ss << in.rdbuf();
@@ -411,7 +409,8 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
 }
 
 std::string to_toml(const CaseSpec& c) {
-  std::string out = fmt::format("# resolved case: every key with its value (rubdyn)\nname = \"{}\"\n", c.name);
+  std::string out =
+      fmt::format("# resolved case: every key with its value (rubdyn)\nname = \"{}\"\n", c.name);
   CaseSpec copy = c;  // schema accessors take a mutable CaseSpec
   std::string section;
   for (const auto& ks : schema()) {

@@ -47,7 +47,9 @@ std::string json_string(std::string_view s) {
 }
 
 /// JSON has no NaN or infinity: they are written as null.
-std::string json_number(double x) { return std::isfinite(x) ? fmt::format("{:.17g}", x) : "null"; }
+std::string json_number(double x) {
+  return std::isfinite(x) ? fmt::format("{:.17g}", x) : "null";
+}
 
 }  // namespace
 

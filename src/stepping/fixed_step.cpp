@@ -3,11 +3,12 @@
 // shared/design/time-steppers.md and include/rubdyn/stepping/fixed_step.hpp).
 #include "rubdyn/stepping/fixed_step.hpp"
 
+#include <fmt/format.h>
+
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <chrono>
 #include <cmath>
-#include <fmt/format.h>
 
 #include "rubdyn/core/run_monitor.hpp"
 
@@ -123,7 +124,7 @@ class FixedStepRunner {
   double h_ = 0;
   // state: q_i (positions; theta grows, so differences are kept separately), increments
   Vec7 q_ = Vec7::Zero(), v_ = Vec7::Zero();
-  Vec7 dq_prev_ = Vec7::Zero();  // Carpenter: Delta_i = q_i - q_{i-1}
+  Vec7 dq_prev_ = Vec7::Zero();                    // Carpenter: Delta_i = q_i - q_{i-1}
   double acc_th_prev_ = 0.0, acc_th_prev2_ = 0.0;  // Carpenter: theta'' at t_{i-1}, t_{i-2}
   Vec7 q_next_ = Vec7::Zero(), v_next_ = Vec7::Zero();
   double FN_ = 0, FT_ = 0, PN_ = 0, PT_ = 0;
@@ -176,7 +177,8 @@ void FixedStepRunner::record(long i, double t, const Vec7& q, const Vec7& v, dou
     out = i % o_.output_every == 0;
   } else if (t >= next_t_out_ - 1e-9 * h_) {
     out = true;
-    while (next_t_out_ <= t + 1e-9 * h_) next_t_out_ = sum_.t_start + (++next_sample_) * o_.output_dt;
+    while (next_t_out_ <= t + 1e-9 * h_)
+      next_t_out_ = sum_.t_start + (++next_sample_) * o_.output_dt;
   }
   if (out) {
     Sample s;
@@ -356,8 +358,10 @@ bool FixedStepRunner::moreau_jean_step(double t, bool project) {
       const double uT = ci.W_T.dot(vfree) + law_.e_t * ci.v_t;
       const LocalSolution sol = solve_local(A_NN, A_NT, A_TT, uN, uT, law_.mu);
       if (!sol.ok) {
-        fail_ = fmt::format("mj: the contact problem has no solution at t = {:.17g} "
-                            "(Painleve-type Delassus matrix)", t);
+        fail_ = fmt::format(
+            "mj: the contact problem has no solution at t = {:.17g} "
+            "(Painleve-type Delassus matrix)",
+            t);
         return false;
       }
       if (sol.ambiguous) ++mj_ambiguous_;
@@ -440,12 +444,12 @@ RunSummary FixedStepRunner::run(const MechanicalState& init, double t_end) {
   for (; i < last; ++i) {
     t = init.t + static_cast<double>(i) * h_;
     const double vN_before = m_.contact(q_, v_).v_N;
-    const bool ok = carpenter ? carpenter_step(t, o_.scheme == FixedStepScheme::CarpQN)
-                              : moreau_jean_step(t, o_.scheme == FixedStepScheme::MoreauJeanProjected);
+    const bool ok = carpenter
+                        ? carpenter_step(t, o_.scheme == FixedStepScheme::CarpQN)
+                        : moreau_jean_step(t, o_.scheme == FixedStepScheme::MoreauJeanProjected);
     if (!ok) {
-      sum_.termination =
-          fail_.find("non-finite") != std::string::npos ? Termination::NonFinite
-                                                        : Termination::SolverFailure;
+      sum_.termination = fail_.find("non-finite") != std::string::npos ? Termination::NonFinite
+                                                                       : Termination::SolverFailure;
       sum_.message = fail_;
       break;
     }

@@ -46,7 +46,7 @@ ContactOperators ops(const LagrangianModel& m, double vx, double vy = 0.0) {
 }
 }  // namespace
 
-TEST_CASE("Mode selection: regular sliding, sticking and lift-off", "[contact]") {
+TEST_CASE("Mode selection: regular sliding - sticking and lift-off", "[contact]") {
   // c = 0: no coupling. Pressed (P = -1): slip in the direction of v_t, F_N = 1, F_T = -mu s.
   const CoupledBlock pressed(0.5, 0.0, -1.0);
   auto d = select_mode(ops(pressed, -2.0), 0.5, 1e-9);

@@ -20,7 +20,7 @@ std::vector<const EventRecord*> events_of(const MemorySink& s, EventKind k) {
 }
 }  // namespace
 
-TEST_CASE("Spring-mass without contact: no event, error proportional to rtol", "[events]") {
+TEST_CASE("Spring-mass without contact: no event - error proportional to rtol", "[events]") {
   const SpringMass model;
   double errs[2];
   const double rtols[2] = {1e-8, 1e-12};
@@ -85,8 +85,7 @@ TEST_CASE("Bouncing ball: impact times and the accumulation time match the close
   REQUIRE(last.q[1] == Approx(0.0).margin(1e-12));
 }
 
-TEST_CASE("Block on a belt: stick and slip switch times match the analytic solution",
-          "[events]") {
+TEST_CASE("Block on a belt: stick and slip switch times match the analytic solution", "[events]") {
   const BlockOnBelt model(0.5, 100.0, 1.0, 0.2);  // x_e w = 0.49 > v_b = 0.2: sticks
   REQUIRE(model.x_e() * model.w() > model.belt_speed());
   MemorySink sink;
@@ -118,7 +117,7 @@ TEST_CASE("Block on a belt: stick and slip switch times match the analytic solut
   }
 }
 
-TEST_CASE("Rotor resting on the stator, mu = 0, no spin: static contact force", "[events]") {
+TEST_CASE("Rotor resting on the stator - mu = 0 - no spin: static contact force", "[events]") {
   RotorStatorParams p;
   p.contact.mu = 0.0;
   p.loads.torque = 0.0;
@@ -143,7 +142,7 @@ TEST_CASE("Rotor resting on the stator, mu = 0, no spin: static contact force", 
   }
 }
 
-TEST_CASE("Reference case, 30 ms: invariants hold", "[events][rotor]") {
+TEST_CASE("Reference case over its whole 0.5 s: invariants hold", "[events][rotor]") {
   const RotorStatorModel model(RotorStatorParams{});
   MechanicalState s0;
   s0.v[TH] = 2000.0;
@@ -151,17 +150,16 @@ TEST_CASE("Reference case, 30 ms: invariants hold", "[events][rotor]") {
   EventDrivenOptions opt;
   opt.output_dt = 1e-4;
   opt.omega_lim = 2110.0;
-  const RunSummary s = run_event_driven(model, s0, 0.03, opt, sink);
+  const RunSummary s = run_event_driven(model, s0, 0.5, opt, sink);
   INFO(s.message);
   REQUIRE(s.complete());
   REQUIRE(s.events[static_cast<int>(EventKind::Impact)] >= 1);
+  // spec: omega passes omega_lim at about 0.33 s (free acceleration alone: exactly 0.33 s)
+  REQUIRE(s.t_omega_lim == Approx(0.33).margin(0.01));
   const double g0 = model.params().stator.gap;
   REQUIRE(s.max_penetration <= 1e-9 * g0);
-  // F_N >= 0 in contact. At a lift-off the event time is CVODE's root of the F_N witness on the
-  // (projected) interpolant, just past its zero: F_N there is the witness's location error,
-  // measured at -1e-10 ... -4e-10 N for rtol 1e-7 ... 1e-12 (independent of rtol), i.e. 1e-11
-  // of F_N ~ 25 N. The bound is 1e-9 N.
-  REQUIRE(s.min_F_N_in_contact >= -1e-9);
+  // F_N >= 0 in contact: a lift-off is logged at the last time F_N still has its sign.
+  REQUIRE(s.min_F_N_in_contact >= 0.0);
   REQUIRE(s.max_cone_violation <= 1e-9);
   REQUIRE(s.max_drift_position <= 1e-12 * g0);
   // energy balance to 1e-8 of the torque's work
@@ -205,7 +203,7 @@ class GrazingOscillator final : public rubdyn::testing::PaddedModel {
 };
 }  // namespace
 
-TEST_CASE("Grazing: a tangential touch is detected, logged, and does not change the motion",
+TEST_CASE("Grazing: a tangential touch is detected - logged - and does not change the motion",
           "[events]") {
   const GrazingOscillator model;
   MechanicalState s0;
@@ -223,7 +221,8 @@ TEST_CASE("Grazing: a tangential touch is detected, logged, and does not change 
   // the gap minimum is located by the v_N witness on the interpolant: its time to ~1e-9 s
   REQUIRE(sink.events[0].t == Approx(M_PI / (2 * model.w)).margin(1e-8));
   double err = 0;
-  for (const auto& x : sink.samples) err = std::max(err, std::abs(x.q[1] - (1 - std::sin(model.w * x.t))));
+  for (const auto& x : sink.samples)
+    err = std::max(err, std::abs(x.q[1] - (1 - std::sin(model.w * x.t))));
   REQUIRE(err < 1e-7);  // rtol 1e-10 over ~1 period on a unit amplitude (cf. the spring-mass test)
 }
 
@@ -245,8 +244,8 @@ TEST_CASE("Event times converge as rtol decreases (block on a belt)", "[events]"
     const auto st = events_of(sink, EventKind::Stick), sl = events_of(sink, EventKind::Slip);
     REQUIRE(st.size() == 1);
     REQUIRE(sl.size() == 1);
-    const double err = std::max(std::abs(st[0]->t - model.stick_time()),
-                                std::abs(sl[0]->t - model.slip_time()));
+    const double err =
+        std::max(std::abs(st[0]->t - model.stick_time()), std::abs(sl[0]->t - model.slip_time()));
     INFO("rtol " << rtol << ": event time error " << err);
     // each 100x tighter tolerance must reduce the error
     REQUIRE(err < prev);

@@ -1,10 +1,11 @@
 // The command-line program: exit codes, nothing written on bad input, the main job's outputs.
+#include <sys/wait.h>
+
 #include <catch2/catch.hpp>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <sys/wait.h>
 
 namespace fs = std::filesystem;
 
@@ -15,8 +16,8 @@ int run(const std::string& args) {
   return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
 fs::path fresh_dir(const std::string& tag) {
-  const fs::path d = fs::temp_directory_path() /
-                     ("rubdyn-cli-" + tag + "-" + std::to_string(::getpid()));
+  const fs::path d =
+      fs::temp_directory_path() / ("rubdyn-cli-" + tag + "-" + std::to_string(::getpid()));
   fs::remove_all(d);
   return d;
 }
@@ -63,7 +64,7 @@ TEST_CASE("CLI: a run ended early by numerical trouble exits 3 and keeps its out
   fs::remove_all(dir);
 }
 
-TEST_CASE("CLI: campbell writes campbell.csv; check prints; bad options exit 2", "[cli]") {
+TEST_CASE("CLI: campbell writes campbell.csv - check prints - bad options exit 2", "[cli]") {
   const fs::path dir = fresh_dir("campbell");
   REQUIRE(run("campbell " + kRef + " --points 11 --out " + dir.string()) == 0);
   std::ifstream in(dir / "campbell.csv");

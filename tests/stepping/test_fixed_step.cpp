@@ -37,11 +37,12 @@ const Sample& at(const MemorySink& s, double t) {
   return *best;
 }
 
-double rate(double e_coarse, double e_fine) { return std::log2(e_coarse / e_fine); }
+double rate(double e_coarse, double e_fine) {
+  return std::log2(e_coarse / e_fine);
+}
 
 const FixedStepScheme kAll[] = {FixedStepScheme::CarpOneVC, FixedStepScheme::CarpQN,
-                                FixedStepScheme::MoreauJean,
-                                FixedStepScheme::MoreauJeanProjected};
+                                FixedStepScheme::MoreauJean, FixedStepScheme::MoreauJeanProjected};
 }  // namespace
 
 TEST_CASE("Contact-free: central differences and MJ(theta = 1/2) converge at order 2",
@@ -69,7 +70,7 @@ TEST_CASE("Contact-free: central differences and MJ(theta = 1/2) converge at ord
   }
 }
 
-TEST_CASE("Bouncing ball: landing within one step, resting on the ground, MJ bounces converge",
+TEST_CASE("Bouncing ball: landing within one step - resting on the ground - MJ bounces converge",
           "[stepping]") {
   // e_n = 0 (plastic, Carpenter's implicit law). Free flight under constant gravity is exact for
   // all four schemes (quadratic), so the only error is the landing, resolved to one step.
@@ -88,8 +89,8 @@ TEST_CASE("Bouncing ball: landing within one step, resting on the ground, MJ bou
       // Carpenter corrects the step that would penetrate: the event is at most one step off.
       // Moreau-Jean activates the contact when d_N + h/2 v_N <= 0 at a step start and logs the
       // impulse at the end of that step: up to two steps after the exact landing.
-      const bool mj = scheme == FixedStepScheme::MoreauJean ||
-                      scheme == FixedStepScheme::MoreauJeanProjected;
+      const bool mj =
+          scheme == FixedStepScheme::MoreauJean || scheme == FixedStepScheme::MoreauJeanProjected;
       CHECK(std::abs(landing - t1) <= (mj ? 2.0 : 1.0) * h * (1 + 1e-9));
       // at rest afterwards: Carpenter and mj-proj on the ground to round-off. Plain MJ keeps the
       // O(h) penetration of velocity-level Signorini: the free step may end below the ground by
@@ -146,7 +147,7 @@ TEST_CASE("Block on a belt: every scheme converges to the stick-slip solution", 
   }
 }
 
-TEST_CASE("Position-level schemes keep d_N >= -1e-9 g0; MJ satisfies velocity Signorini",
+TEST_CASE("Position-level schemes keep d_N >= -1e-9 g0 - MJ satisfies velocity Signorini",
           "[stepping]") {
   const RotorStatorModel model(RotorStatorParams{});
   MechanicalState s0;
@@ -202,8 +203,7 @@ TEST_CASE("carp-qn and carp-onevc agree to O(h) on the first 30 ms of the refere
   CHECK(diff[1] < 0.75 * diff[0] + 1e-15);  // O(h): halving h roughly halves it
 }
 
-TEST_CASE("Carpenter keeps converging at h = 1e-7 (no round-off floor from theta)",
-          "[stepping]") {
+TEST_CASE("Carpenter keeps converging at h = 1e-7 (no round-off floor from theta)", "[stepping]") {
   // First 30 ms of the reference case (three impacts), reference: event-driven at rtol 1e-12.
   // Once contacts occur the schemes are first order, so omega(30 ms) must improve ~10x per
   // 10x smaller step. Storing absolute positions, the central-difference spin speed
@@ -228,8 +228,8 @@ TEST_CASE("Carpenter keeps converging at h = 1e-7 (no round-off floor from theta
     REQUIRE(last.t == Approx(T).margin(1e-12));
     e[k] = std::abs(last.v[TH] - omega_ref);
   }
-  std::printf("carp-onevc, 30 ms: omega errors %.3e %.3e %.3e (h = 1e-5, 1e-6, 1e-7)\n", e[0],
-              e[1], e[2]);
+  std::printf("carp-onevc, 30 ms: omega errors %.3e %.3e %.3e (h = 1e-5, 1e-6, 1e-7)\n", e[0], e[1],
+              e[2]);
   // first order: 10x per decade; 3x allows for the one-step jitter of impact detection
   CHECK(e[1] < e[0] / 3.0);
   CHECK(e[2] < e[1] / 3.0);

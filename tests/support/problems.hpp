@@ -133,8 +133,7 @@ class BouncingBall final : public PaddedModel {
 /// stop before it).
 class BlockOnBelt final : public PaddedModel {
  public:
-  BlockOnBelt(double mu = 0.5, double k = 100.0, double m = 1.0, double v_b = 1.0,
-              double g = 9.81)
+  BlockOnBelt(double mu = 0.5, double k = 100.0, double m = 1.0, double v_b = 1.0, double g = 9.81)
       : PaddedModel({mu, 0.0, 0.0}, 0.01), k_(k), v_b_(v_b), g_(g) {
     mass_ = m;
   }

@@ -19,8 +19,7 @@ constexpr double kM11 = 0.53125, kM12 = 0.71875, kM22 = 3.03125, kH = 0.375;
 // K = diag(k_b, k_s): a w^4 - b w^2 + c = 0 with a = det M, b = k_b (M22 + m_s) + k_s M11,
 // c = k_b k_s.
 std::pair<double, double> closed_form_rest(double kb, double ks, double ms) {
-  const double a = kM11 * (kM22 + ms) - kM12 * kM12, b = kb * (kM22 + ms) + ks * kM11,
-               c = kb * ks;
+  const double a = kM11 * (kM22 + ms) - kM12 * kM12, b = kb * (kM22 + ms) + ks * kM11, c = kb * ks;
   const double disc = std::sqrt(b * b - 4 * a * c);
   const double w1 = std::sqrt((b - disc) / (2 * a)), w2 = std::sqrt((b + disc) / (2 * a));
   return {w1 / (2 * std::numbers::pi), w2 / (2 * std::numbers::pi)};
@@ -70,7 +69,7 @@ TEST_CASE("The static equilibrium satisfies the equations of motion", "[check]")
   CHECK(std::abs(c.d_N) < 1e-18);
 }
 
-TEST_CASE("Campbell at rest matches the closed-form 2x2 problem, for several stators",
+TEST_CASE("Campbell at rest matches the closed-form 2x2 problem - for several stators",
           "[campbell]") {
   for (double scale : {0.5, 1.0, 8.0}) {
     RotorStatorParams p;
@@ -100,7 +99,7 @@ TEST_CASE("Forward and backward split symmetrically for small Omega", "[campbell
   CHECK(asym_a / asym_b == Approx(4.0).epsilon(1e-2));
 }
 
-TEST_CASE("Labels are consistent along the grid: continuous curves, forward rise, backward fall",
+TEST_CASE("Labels are consistent along the grid: continuous curves - forward rise - backward fall",
           "[campbell]") {
   const RotorStatorParams p;
   const auto d = campbell_diagram(p, 2110.0, 201);
@@ -130,8 +129,7 @@ TEST_CASE("Labels are consistent along the grid: continuous curves, forward rise
   CHECK(d.back().f1b == Approx(88.0).margin(1.0));
 }
 
-TEST_CASE("Damped Campbell: positive damping ratios, frequencies close to undamped",
-          "[campbell]") {
+TEST_CASE("Damped Campbell: positive damping ratios - frequencies close to undamped", "[campbell]") {
   const RotorStatorParams p;
   const CampbellPoint u = campbell_point(p, 1000.0), dmp = campbell_point(p, 1000.0, true);
   REQUIRE(dmp.labels_ok);

@@ -146,7 +146,7 @@ TEST_CASE("Each rule on physical parameters is enforced and named", "[io]") {
   CHECK(bad("run", "omega_lim", "-1.0").find("> 0") != std::string::npos);
 }
 
-TEST_CASE("Geometric rules: delta < L and d in (0, L - delta]", "[io]") {
+TEST_CASE("Geometric rules: delta < L and d in (0 - L - delta)", "[io]") {
   CHECK(bad("rotor", "delta", "0.5").find("< L") != std::string::npos);
   CHECK(bad("rotor", "delta", "0.7").find("< L") != std::string::npos);
   CHECK(bad("rotor", "d", "0.45").find("(0, L - delta]") != std::string::npos);
@@ -157,7 +157,7 @@ TEST_CASE("Geometric rules: delta < L and d in (0, L - delta]", "[io]") {
   REQUIRE_NOTHROW(parse_case(text, "case.toml"));
 }
 
-TEST_CASE("Non-finite numbers, wrong types, missing keys, unknown keys and sections", "[io]") {
+TEST_CASE("Non-finite numbers - wrong types - missing keys - unknown keys and sections", "[io]") {
   CHECK(bad("rotor", "mass", "nan").find("finite") != std::string::npos);
   CHECK(bad("stator", "k", "inf").find("finite") != std::string::npos);
   CHECK(bad("contact", "mu", "\"high\"").find("number") != std::string::npos);
@@ -203,13 +203,16 @@ TEST_CASE("Several errors in one file are all reported", "[io]") {
     INFO(e.what());
     REQUIRE(e.issues().size() == 5);
     const std::string msg = e.what();
-    for (const char* key : {"rotor.mass", "contact.mu", "contact.e_n", "solver.kind", "solver.rtoll"})
+    for (const char* key :
+         {"rotor.mass", "contact.mu", "contact.e_n", "solver.kind", "solver.rtoll"})
       CHECK(msg.find(key) != std::string::npos);
   }
 }
 
 TEST_CASE("Solver and output rules", "[io]") {
-  auto solver = [](const std::string& kv) { return std::string(kValid) + "[solver]\n" + kv + "\n"; };
+  auto solver = [](const std::string& kv) {
+    return std::string(kValid) + "[solver]\n" + kv + "\n";
+  };
   CHECK(one_issue(solver("kind = \"mjj\""), "solver.kind", 31).find("did you mean 'mj'") !=
         std::string::npos);
   CHECK(one_issue(solver("rtol = 0.0"), "solver.rtol", 31).find("> 0") != std::string::npos);
@@ -268,11 +271,11 @@ TEST_CASE("Overrides replace or add keys and are validated the same way", "[io]"
 }
 
 TEST_CASE("to_toml round-trips every key", "[io]") {
-  CaseSpec c = parse_case(kValid, "case.toml",
-                          {"contact.e_n=0.3", "initial.x_b=1.25e-7", "initial.vy_s=-0.01",
-                           "solver.kind=\"carp-qn\"", "solver.itmax=7", "solver.theta=0.75",
-                           "output.every=10", "output.folder=\"out/with \\\"quote\\\"\"",
-                           "loads.torque=0.1"});
+  CaseSpec c = parse_case(
+      kValid, "case.toml",
+      {"contact.e_n=0.3", "initial.x_b=1.25e-7", "initial.vy_s=-0.01", "solver.kind=\"carp-qn\"",
+       "solver.itmax=7", "solver.theta=0.75", "output.every=10",
+       "output.folder=\"out/with \\\"quote\\\"\"", "loads.torque=0.1"});
   const CaseSpec back = parse_case(to_toml(c), "resolved.toml");
   CHECK(back.name == c.name);
   CHECK(back.params.contact.e_n == c.params.contact.e_n);

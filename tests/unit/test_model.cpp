@@ -1,11 +1,10 @@
 // The rotor-stator model (paper eq. 11-21) against independent computations: the Lagrangian
 // written from eq. (8)-(10) and differentiated by finite differences, the gap differentiated by
 // finite differences, and the material-point velocities at the contact.
+#include <Eigen/Eigenvalues>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <random>
-
-#include <Eigen/Eigenvalues>
 
 #include "rubdyn/model/rotor_stator_model.hpp"
 
@@ -13,7 +12,9 @@ using namespace rubdyn;
 
 namespace {
 
-RotorStatorParams reference_params() { return RotorStatorParams{}; }
+RotorStatorParams reference_params() {
+  return RotorStatorParams{};
+}
 
 struct RandomStates {
   std::mt19937_64 rng{12345};
@@ -21,8 +22,8 @@ struct RandomStates {
   Vec7 q(double g0) {
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     Vec7 x;
-    x << 0.5 * g0 * u(rng), 0.5 * g0 * u(rng), 1.4 * g0 * u(rng), 1.4 * g0 * u(rng),
-        50.0 * u(rng), 0.5 * g0 * u(rng), 0.5 * g0 * u(rng);
+    x << 0.5 * g0 * u(rng), 0.5 * g0 * u(rng), 1.4 * g0 * u(rng), 1.4 * g0 * u(rng), 50.0 * u(rng),
+        0.5 * g0 * u(rng), 0.5 * g0 * u(rng);
     return x;
   }
   Vec7 v() {
@@ -63,7 +64,7 @@ double potential_eq12(const RotorStatorParams& p, const Vec7& q) {
 
 }  // namespace
 
-TEST_CASE("M(q) is symmetric positive definite; G is skew; gyroscopic forces do no work",
+TEST_CASE("M(q) is symmetric positive definite - G is skew - gyroscopic forces do no work",
           "[model]") {
   const auto p = reference_params();
   const RotorStatorModel model(p);
@@ -76,8 +77,7 @@ TEST_CASE("M(q) is symmetric positive definite; G is skew; gyroscopic forces do 
     Eigen::SelfAdjointEigenSolver<Mat7> es(M);
     REQUIRE(es.eigenvalues().minCoeff() > 0.0);
     // T = 1/2 v^T M v equals eq. (8): both are sums of ~1e5 J terms; 1e-12 relative is round-off.
-    REQUIRE(model.kinetic_energy(q, v) ==
-            Approx(kinetic_eq8(p, q, v)).epsilon(1e-12));
+    REQUIRE(model.kinetic_energy(q, v) == Approx(kinetic_eq8(p, q, v)).epsilon(1e-12));
     const double gyro_power = v.dot(v[TH] * (model.G() * v));
     // exactly zero in exact arithmetic; round-off of terms of size H * |v|^3 ~ 1e2
     REQUIRE(std::abs(gyro_power) < 1e-12 * model.H() * v.squaredNorm() * std::abs(v[TH]));
@@ -135,7 +135,7 @@ TEST_CASE("Equations of motion equal Euler-Lagrange of the Lagrangian (11)-(12)"
   }
 }
 
-TEST_CASE("W_N is the gradient of d_N; v_t is the relative velocity of the material points",
+TEST_CASE("W_N is the gradient of d_N - v_t is the relative velocity of the material points",
           "[model][contact]") {
   const auto p = reference_params();
   const RotorStatorModel model(p);
@@ -146,7 +146,8 @@ TEST_CASE("W_N is the gradient of d_N; v_t is the relative velocity of the mater
     REQUIRE(c.normal_defined);
     Vec7 grad;
     for (int i = 0; i < kNumDofs; ++i) {
-      const double s = 1e-9;  // gap ~ 1e-4 m: truncation ~ s^2/g0 ~ 1e-14, round-off ~ 1e-16*1e-4/1e-9
+      const double s =
+          1e-9;  // gap ~ 1e-4 m: truncation ~ s^2/g0 ~ 1e-14, round-off ~ 1e-16*1e-4/1e-9
       Vec7 qp = q, qm = q;
       qp[i] += s;
       qm[i] -= s;
@@ -173,8 +174,8 @@ TEST_CASE("W_N is the gradient of d_N; v_t is the relative velocity of the mater
                   q[YS] + s * v[YS] + (Rr + p.stator.gap) * ny);
     };
     const double s = 1e-8;
-    const Vec2 vrel = ((rotor_point(s) - rotor_point(-s)) - (stator_point(s) - stator_point(-s))) /
-                      (2 * s);
+    const Vec2 vrel =
+        ((rotor_point(s) - rotor_point(-s)) - (stator_point(s) - stator_point(-s))) / (2 * s);
     const Vec2 t(ny, -nx);  // the paper's tangent (eq. 19 on the rotor dofs)
     // |v_t| ~ R_r omega ~ 100 m/s; FD truncation ~ (s omega)^2 ~ 4e-10 relative
     REQUIRE(c.v_t == Approx(t.dot(vrel)).epsilon(1e-8));
@@ -280,7 +281,7 @@ Rk4State rk4_step(const RotorStatorModel& m, const Rk4State& s, double h) {
 }
 }  // namespace
 
-TEST_CASE("Contact-free motion conserves energy; with torque and damping the balance closes",
+TEST_CASE("Contact-free motion conserves energy - with torque and damping the balance closes",
           "[model]") {
   // A whirling, spinning rotor inside the clearance (no contact over 5 ms), RK4 with h = 2e-7 s:
   // (h w)^4 ~ (2e-7 * 4e3)^4 ~ 4e-13 per unit time on the fastest mode, far below 1e-10.
@@ -300,7 +301,9 @@ TEST_CASE("Contact-free motion conserves energy; with torque and damping the bal
     p.loads.torque = 0.0;
     p.loads.gravity = 0.0;
     const RotorStatorModel m(p);
-    auto energy = [&m](const Rk4State& x) { return m.kinetic_energy(x.q, x.v) + m.potential_energy(x.q); };
+    auto energy = [&m](const Rk4State& x) {
+      return m.kinetic_energy(x.q, x.v) + m.potential_energy(x.q);
+    };
     Rk4State s = s0;
     double spin_min = 1e300, spin_max = 0;
     for (int i = 0; i < steps; ++i) {
@@ -319,7 +322,9 @@ TEST_CASE("Contact-free motion conserves energy; with torque and damping the bal
   {
     const RotorStatorParams p;  // torque, dampers and gravity
     const RotorStatorModel m(p);
-    auto energy = [&m](const Rk4State& x) { return m.kinetic_energy(x.q, x.v) + m.potential_energy(x.q); };
+    auto energy = [&m](const Rk4State& x) {
+      return m.kinetic_energy(x.q, x.v) + m.potential_energy(x.q);
+    };
     Rk4State s = s0;
     for (int i = 0; i < steps; ++i) s = rk4_step(m, s, h);
     const double torque_work = p.loads.torque * (s.q[TH] - s0.q[TH]);

@@ -18,8 +18,8 @@ std::string slurp(const fs::path& p) {
   return s.str();
 }
 fs::path fresh_dir(const std::string& tag) {
-  const fs::path d = fs::temp_directory_path() /
-                     ("rubdyn-test-" + tag + "-" + std::to_string(::getpid()));
+  const fs::path d =
+      fs::temp_directory_path() / ("rubdyn-test-" + tag + "-" + std::to_string(::getpid()));
   fs::remove_all(d);
   return d;
 }

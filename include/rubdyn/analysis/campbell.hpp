@@ -21,10 +21,10 @@
 namespace rubdyn {
 
 struct CampbellPoint {
-  double omega = 0.0;                 ///< spin speed [rad/s]
+  double omega = 0.0;                         ///< spin speed [rad/s]
   double f1b = 0, f1f = 0, f2b = 0, f2f = 0;  ///< frequencies [Hz]
   double z1b = 0, z1f = 0, z2b = 0, z2f = 0;  ///< damping ratios (0 when undamped)
-  bool labels_ok = true;              ///< exactly two forward and two backward modes found
+  bool labels_ok = true;                      ///< exactly two forward and two backward modes found
 };
 
 /// The four frequencies (and damping ratios) at one spin speed. No allocation.

@@ -12,11 +12,11 @@ struct DerivedQuantities {
   double y_b = 0, y_r = 0, y_s = 0;  ///< static positions [m]
   double F_N = 0;                    ///< static contact force nu m g [N]
   // Natural frequencies at rest [Hz]
-  double f1 = 0, f2 = 0;             ///< coupled system (stator tied at R), double modes
-  double f_stator = 0;               ///< stator alone sqrt(k_s / m_s) / 2 pi
-  double f_bearing_rotor = 0;        ///< rotor on its bearing, no stator (the other mode: 0 Hz)
+  double f1 = 0, f2 = 0;       ///< coupled system (stator tied at R), double modes
+  double f_stator = 0;         ///< stator alone sqrt(k_s / m_s) / 2 pi
+  double f_bearing_rotor = 0;  ///< rotor on its bearing, no stator (the other mode: 0 Hz)
   // Free acceleration from omega0 to omega_lim under tau_a, no contact, no lateral motion
-  double t_free_to_omega_lim = 0;    ///< [s]: 0 if omega0 >= omega_lim, inf if never
+  double t_free_to_omega_lim = 0;  ///< [s]: 0 if omega0 >= omega_lim, inf if never
 };
 
 DerivedQuantities derive(const RotorStatorParams& p, double omega0, double omega_lim);

@@ -6,7 +6,8 @@
 // Tangent  W_T = C_T, orthogonal to C_N, with -R_r on theta               (eq. 19)
 //          t = (n_y, -n_x) is the direction of a positive F_T on the rotor centre.
 // Speeds   v_N = W_N^T v = d(d_N)/dt (negative when closing)
-//          v_t = W_T^T v = t . (v_rotor_point - v_stator_point): relative tangential velocity of the
+//          v_t = W_T^T v = t . (v_rotor_point - v_stator_point): relative tangential velocity of
+//          the
 //                rotor's material point at the contact (spin included) with respect to the stator's
 //                material point. A positive spin with a still orbit gives v_t = -R_r theta_dot < 0.
 // Forces   f_c = W_N F_N + W_T F_T   (eq. 20); F_N >= 0 pushes the rotor towards the stator centre.
@@ -21,7 +22,7 @@
 namespace rubdyn {
 
 struct ContactKinematics {
-  double d_N = 0.0;   ///< gap [m]
+  double d_N = 0.0;  ///< gap [m]
   Vec7 W_N = Vec7::Zero();
   Vec7 W_T = Vec7::Zero();
   double v_N = 0.0;     ///< normal gap rate [m/s]

@@ -5,11 +5,11 @@
 #include <cstdio>
 #include <cstdlib>
 
-#define RUBDYN_DEMAND(cond)                                                                        \
-  do {                                                                                             \
-    if (!(cond)) {                                                                                 \
-      std::fprintf(stderr, "rubdyn: internal error: demand '%s' failed in %s (%s:%d)\n", #cond,    \
-                   __func__, __FILE__, __LINE__);                                                  \
-      std::abort();                                                                                \
-    }                                                                                              \
+#define RUBDYN_DEMAND(cond)                                                                     \
+  do {                                                                                          \
+    if (!(cond)) {                                                                              \
+      std::fprintf(stderr, "rubdyn: internal error: demand '%s' failed in %s (%s:%d)\n", #cond, \
+                   __func__, __FILE__, __LINE__);                                               \
+      std::abort();                                                                             \
+    }                                                                                           \
   } while (false)

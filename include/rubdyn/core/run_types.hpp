@@ -22,16 +22,16 @@ std::string_view to_string(Phase p);
 
 /// Kinds of events logged by the solvers.
 enum class EventKind : int {
-  Impact = 0,   ///< contact onset with v_N < 0, impact map applied
-  Contact,      ///< contact closes without impact (v_N = 0), or onset seen by a fixed-step scheme
-  Liftoff,      ///< F_N reaches 0 and the contact opens
-  Stick,        ///< slip -> stick (v_t reaches 0 and sticking is consistent)
-  Slip,         ///< stick -> slip (|F_T| reaches mu F_N)
-  Reversal,     ///< slip+ <-> slip- through v_t = 0
-  Grazing,      ///< gap minimum touching zero with v_N ~ 0
-  Zeno,         ///< accumulation of impacts, extrapolated
-  Painleve,     ///< inconsistent or non-unique contact problem
-  Release,      ///< contact opens (fixed-step schemes, seen between steps)
+  Impact = 0,  ///< contact onset with v_N < 0, impact map applied
+  Contact,     ///< contact closes without impact (v_N = 0), or onset seen by a fixed-step scheme
+  Liftoff,     ///< F_N reaches 0 and the contact opens
+  Stick,       ///< slip -> stick (v_t reaches 0 and sticking is consistent)
+  Slip,        ///< stick -> slip (|F_T| reaches mu F_N)
+  Reversal,    ///< slip+ <-> slip- through v_t = 0
+  Grazing,     ///< gap minimum touching zero with v_N ~ 0
+  Zeno,        ///< accumulation of impacts, extrapolated
+  Painleve,    ///< inconsistent or non-unique contact problem
+  Release,     ///< contact opens (fixed-step schemes, seen between steps)
   Count
 };
 inline constexpr int kNumEventKinds = static_cast<int>(EventKind::Count);
@@ -39,18 +39,20 @@ std::string_view to_string(EventKind k);
 
 /// Why a run ended.
 enum class Termination : int {
-  Completed = 0,     ///< t_end reached
-  SolverFailure,     ///< the ODE/DAE solver or a Newton loop failed
-  NonFinite,         ///< NaN or inf in the state
-  Painleve,          ///< the contact problem has no consistent (or several) solutions and no rule applies
-  Zeno,              ///< an accumulation of impacts that could not be resolved
-  Chattering,        ///< too many events per unit of simulated time
-  Interrupted,       ///< stopped by the user or a limit
+  Completed = 0,  ///< t_end reached
+  SolverFailure,  ///< the ODE/DAE solver or a Newton loop failed
+  NonFinite,      ///< NaN or inf in the state
+  Painleve,    ///< the contact problem has no consistent (or several) solutions and no rule applies
+  Zeno,        ///< an accumulation of impacts that could not be resolved
+  Chattering,  ///< too many events per unit of simulated time
+  Interrupted,  ///< stopped by the user or a limit
 };
 std::string_view to_string(Termination t);
 
 /// Exit code of the CLI for a termination: 0 for Completed, 3 otherwise.
-inline int exit_code(Termination t) { return t == Termination::Completed ? 0 : 3; }
+inline int exit_code(Termination t) {
+  return t == Termination::Completed ? 0 : 3;
+}
 
 /// One output sample (dense output on the output grid, or before/after an event).
 struct Sample {
@@ -70,17 +72,17 @@ struct EventRecord {
   double d_N = 0.0;
   double v_N_minus = 0.0, v_N_plus = 0.0;
   double v_t_minus = 0.0, v_t_plus = 0.0;
-  double P_N = 0.0, P_T = 0.0;  ///< impulses
-  double F_N = 0.0, F_T = 0.0;  ///< forces after the event
+  double P_N = 0.0, P_T = 0.0;                                       ///< impulses
+  double F_N = 0.0, F_T = 0.0;                                       ///< forces after the event
   double t_accumulation = std::numeric_limits<double>::quiet_NaN();  ///< zeno: extrapolated
-  std::string witness;          ///< which witness fired, or how the event was found
-  std::string note;             ///< free text (Painleve rule, Zeno truncation estimate, ...)
+  std::string witness;  ///< which witness fired, or how the event was found
+  std::string note;     ///< free text (Painleve rule, Zeno truncation estimate, ...)
 };
 
 /// Counters and invariants of a run.
 struct RunSummary {
-  std::string solver;           ///< solver kind, e.g. "event", "mj"
-  std::string options;          ///< solver options as a JSON object text, e.g. {"rtol":1e-10}
+  std::string solver;   ///< solver kind, e.g. "event", "mj"
+  std::string options;  ///< solver options as a JSON object text, e.g. {"rtol":1e-10}
   double t_start = 0.0, t_end_requested = 0.0, t_reached = 0.0;
   double wall_seconds = 0.0;
   long steps = 0, rhs_evals = 0, jac_evals = 0, root_evals = 0, newton_iters = 0;
@@ -88,15 +90,15 @@ struct RunSummary {
   std::array<long, kNumEventKinds> events{};
   std::array<double, kNumPhases> phase_time{};  ///< simulated seconds spent in each phase
   // invariants
-  double max_penetration = 0.0;        ///< max(-d_N, 0) over samples and step ends [m]
+  double max_penetration = 0.0;  ///< max(-d_N, 0) over samples and step ends [m]
   double min_F_N_in_contact = std::numeric_limits<double>::quiet_NaN();
-  double max_cone_violation = 0.0;     ///< max(|F_T| - mu F_N, 0) / (largest contact force) [-]
-  double max_drift_position = 0.0;     ///< max |d_N| in persistent contact [m]
-  double max_drift_velocity = 0.0;     ///< max |v_N| in persistent contact [m/s]
+  double max_cone_violation = 0.0;  ///< max(|F_T| - mu F_N, 0) / (largest contact force) [-]
+  double max_drift_position = 0.0;  ///< max |d_N| in persistent contact [m]
+  double max_drift_velocity = 0.0;  ///< max |v_N| in persistent contact [m/s]
   // energy balance: E(t) - E(0) = W_torque + W_damping + W_friction + W_impacts (+ residual)
   double energy_initial = 0.0, energy_final = 0.0;
   double work_torque = 0.0, work_damping = 0.0, work_friction = 0.0, work_impacts = 0.0;
-  double energy_residual = 0.0;        ///< (E_final - E_initial) - sum of works [J]
+  double energy_residual = 0.0;  ///< (E_final - E_initial) - sum of works [J]
   // spin
   double omega_max = 0.0, omega_final = 0.0;
   double t_omega_lim = std::numeric_limits<double>::quiet_NaN();  ///< NaN when never crossed

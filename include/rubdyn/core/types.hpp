@@ -23,9 +23,11 @@ using Mat14 = Eigen::Matrix<double, 2 * kNumDofs, 2 * kNumDofs>;
 enum Dof : int { XB = 0, YB = 1, XR = 2, YR = 3, TH = 4, XS = 5, YS = 6 };
 
 /// Names of the dofs in q order, as used in output files and case files.
-inline constexpr const char* kDofNames[kNumDofs] = {"x_b", "y_b", "x_r", "y_r", "theta", "x_s", "y_s"};
+inline constexpr const char* kDofNames[kNumDofs] = {"x_b",   "y_b", "x_r", "y_r",
+                                                    "theta", "x_s", "y_s"};
 /// Names of the velocities in v order, as used in output files.
-inline constexpr const char* kVelNames[kNumDofs] = {"vx_b", "vy_b", "vx_r", "vy_r", "omega", "vx_s", "vy_s"};
+inline constexpr const char* kVelNames[kNumDofs] = {"vx_b",  "vy_b", "vx_r", "vy_r",
+                                                    "omega", "vx_s", "vy_s"};
 
 /// A mechanical state: positions and velocities at one time.
 struct MechanicalState {

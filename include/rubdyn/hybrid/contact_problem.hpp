@@ -51,9 +51,9 @@ PhaseDynamics phase_dynamics(const ContactOperators& op, Phase phase, double mu)
 struct ModeDecision {
   Phase phase = Phase::Free;
   PhaseDynamics dyn;
-  int n_consistent = 0;  ///< 1 in a well-posed situation
-  bool painleve = false; ///< no candidate (inconsistent) or several (non-unique)
-  std::string note;      ///< what was decided and why (logged with the event)
+  int n_consistent = 0;   ///< 1 in a well-posed situation
+  bool painleve = false;  ///< no candidate (inconsistent) or several (non-unique)
+  std::string note;       ///< what was decided and why (logged with the event)
 };
 /// Enumerates the candidates {free, slip+, slip-, stick} (only the sliding direction when
 /// |v_t| > v_t_eps; no stick and no slip direction when mu = 0) and keeps the consistent one;

@@ -18,36 +18,36 @@ struct InitialState {
 
 /// [run]
 struct RunOptions {
-  double t_end = 0.5;        ///< [s]
-  double omega_lim = 2110.0; ///< speed limit used by the analysis [rad/s]
+  double t_end = 0.5;         ///< [s]
+  double omega_lim = 2110.0;  ///< speed limit used by the analysis [rad/s]
 };
 
 /// [solver]
 struct SolverOptions {
-  std::string kind = "event";   ///< event | carp-onevc | carp-qn | mj | mj-proj
+  std::string kind = "event";  ///< event | carp-onevc | carp-qn | mj | mj-proj
   // event-driven
-  double rtol = 1e-10;          ///< relative tolerance
-  double atol = 1e-12;          ///< absolute tolerance, scaled per component by the solver
-  std::string method = "bdf";   ///< bdf | adams (CVODE linear multistep family)
+  double rtol = 1e-10;                 ///< relative tolerance
+  double atol = 1e-12;                 ///< absolute tolerance, scaled per component by the solver
+  std::string method = "bdf";          ///< bdf | adams (CVODE linear multistep family)
   double max_events_per_second = 1e6;  ///< chattering guard: events per simulated second
   // fixed-step
-  double h = 1e-6;              ///< time step [s]
-  int itmax = 20;               ///< carp-qn: max quasi-Newton iterations per step
-  double qn_tol = 1e-12;        ///< carp-qn: relative tolerance on the step increment
-  double theta = 0.5;           ///< Moreau-Jean theta (gamma in the paper), in [0.5, 1]
-  double eta = 0.5;             ///< Moreau-Jean mass-matrix weight, in [0, 1]
+  double h = 1e-6;        ///< time step [s]
+  int itmax = 20;         ///< carp-qn: max quasi-Newton iterations per step
+  double qn_tol = 1e-12;  ///< carp-qn: relative tolerance on the step increment
+  double theta = 0.5;     ///< Moreau-Jean theta (gamma in the paper), in [0.5, 1]
+  double eta = 0.5;       ///< Moreau-Jean mass-matrix weight, in [0, 1]
 };
 
 /// [output]
 struct OutputOptions {
-  double dt = 1e-4;        ///< output interval [s] (dense output, never changes the steps taken)
-  int every = 0;           ///< fixed-step schemes: write every N-th step (0: use dt)
-  std::string folder;      ///< output folder (empty: out/<case name>)
+  double dt = 1e-4;    ///< output interval [s] (dense output, never changes the steps taken)
+  int every = 0;       ///< fixed-step schemes: write every N-th step (0: use dt)
+  std::string folder;  ///< output folder (empty: out/<case name>)
 };
 
 struct CaseSpec {
-  std::string name;         ///< case name (file stem unless given)
-  std::string source;       ///< path of the case file (for messages)
+  std::string name;    ///< case name (file stem unless given)
+  std::string source;  ///< path of the case file (for messages)
   RotorStatorParams params;
   InitialState initial;
   RunOptions run;

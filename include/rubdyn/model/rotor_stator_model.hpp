@@ -21,7 +21,8 @@
 //           = M22 xr'' + M12 xb'' + H w theta''/2 + H theta' w'/2 - (-H theta' w'/2)
 //           = [M q'']_xr + H theta' (yr' - yb')                      -> row x_r of theta' G v
 //   and likewise for x_b, y_b, y_r. Hence (eq. 13, 16) with G skew-symmetric (eq. 14):
-//   M(q) q'' + (theta' G + D) q' + K q = f_ext,   f_ext = (0, -(1-nu) m g, 0, -nu m g, tau_a, 0, 0).
+//   M(q) q'' + (theta' G + D) q' + K q = f_ext,   f_ext = (0, -(1-nu) m g, 0, -nu m g, tau_a, 0,
+//   0).
 // The potential is V = k_b/2 (x_b^2 + y_b^2) + m g (nu y_r + (1-nu) y_b) + k_s/2 (x_s^2 + y_s^2)
 // (eq. 12, 15: the stator has no gravity term in the paper; its weight is carried by its
 // support at q_s = 0). D holds c_b on (x_b, y_b) and c_s on (x_s, y_s). Since G is skew, the

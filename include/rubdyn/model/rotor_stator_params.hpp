@@ -21,10 +21,10 @@ struct BearingParams {
 };
 
 struct StatorParams {
-  double mass = 2.0;   ///< m_s [kg]
-  double k = 2.0e6;    ///< k_s [N/m]
-  double c = 100.0;    ///< c_s [N s/m]
-  double gap = 2.0e-4; ///< g0 = R_s - R_r [m]
+  double mass = 2.0;    ///< m_s [kg]
+  double k = 2.0e6;     ///< k_s [N/m]
+  double c = 100.0;     ///< c_s [N s/m]
+  double gap = 2.0e-4;  ///< g0 = R_s - R_r [m]
 };
 
 struct LoadParams {

@@ -3,8 +3,9 @@
 // (paper, section 4.2-4.3, Table 1; decisions in shared/design/time-steppers.md):
 //   carp-onevc  Carpenter, Algorithm 1 (central differences, one verification/correction)
 //   carp-qn     Carpenter inside a quasi-Newton loop (Roques et al., JSV 329, 2010)
-//   mj          Moreau-Jean theta-method, velocity-level Signorini + Coulomb cone, Newton impact law
-//   mj-proj     projected Moreau-Jean (Acary, CMAME 256, 2013): positions projected onto d_N >= 0
+//   mj          Moreau-Jean theta-method, velocity-level Signorini + Coulomb cone, Newton impact
+//   law mj-proj     projected Moreau-Jean (Acary, CMAME 256, 2013): positions projected onto d_N >=
+//   0
 #include <string_view>
 
 #include "rubdyn/core/run_types.hpp"
@@ -26,7 +27,7 @@ struct FixedStepOptions {
   double eta = 0.5;       ///< Moreau-Jean weight of q in M(q_{i+eta})
   int output_every = 0;   ///< write every N-th step (0: use output_dt)
   double output_dt = 1e-4;
-  double omega_lim = 0.0; ///< for the summary: first time v[TH] >= omega_lim
+  double omega_lim = 0.0;  ///< for the summary: first time v[TH] >= omega_lim
 };
 
 /// Runs a scheme from `initial` to t_end, handing samples, events and the summary to `sink`.
