@@ -2,7 +2,6 @@
 // names the key and the line), several errors at once, overrides, and the resolved-case round trip.
 #include <catch2/catch.hpp>
 #include <fstream>
-#include <regex>
 #include <sstream>
 #include <string>
 
