@@ -7,6 +7,7 @@
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
 #include <string>
@@ -15,10 +16,17 @@ namespace rubdyn::detail {
 
 namespace {
 
+/// CVodeGetReturnFlagName returns a malloc'ed string: copy and free it.
+std::string flag_name(int flag) {
+  char* name = CVodeGetReturnFlagName(flag);
+  std::string s = name ? name : "unknown flag";
+  std::free(name);
+  return s;
+}
+
 void check(int flag, const char* what) {
   if (flag < 0) {
-    throw std::runtime_error(std::string("CVODE: ") + what +
-                             " failed: " + CVodeGetReturnFlagName(flag));
+    throw std::runtime_error(std::string("CVODE: ") + what + " failed: " + flag_name(flag));
   }
 }
 
@@ -177,7 +185,7 @@ CvodeSession::Status CvodeSession::advance(double tout, double& t, double* y, bo
     }
     return Status::Reached;
   }
-  last_error_ = CVodeGetReturnFlagName(flag);
+  last_error_ = flag_name(flag);
   return Status::Failure;
 }
 

@@ -354,6 +354,11 @@ class Integrator {
   Vec14 y_restart_ = Vec14::Zero();
   bool omega_pending_ = false;
   bool gap_rate_deferred_ = false;
+  bool root_without_restart_ = false;  // the last return was a root handled without restart
+  int recoveries_ = 0;
+  double t_last_root_ = 0.0;
+  Vec14 y_last_root_ = Vec14::Zero();
+  std::array<double, kNq> work_last_root_{};
   double cache_t_ = std::numeric_limits<double>::quiet_NaN(), cache_friction_power_ = 0.0;
   Vec14 cache_y_ = Vec14::Zero();
   Phase phase_ = Phase::Free;
@@ -637,6 +642,21 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
       const double tout = std::min(next_out, t_end_);
       const bool arming = gap_rate_deferred_;
       const auto st = cur_->advance(tout, t, y.data(), arming);
+      if (st == detail::CvodeSession::Status::Failure && root_without_restart_ &&
+          recoveries_ < 100) {
+        // CVODE stops when a witness is zero both at the last root and just after it ("root
+        // found at and very near"), which a degenerate witness can do. Restarting the phase at
+        // that root makes the witness inactive until it moves away (half-open interval rule).
+        ++recoveries_;
+        ++sum_.suppressed_witnesses;
+        root_without_restart_ = false;
+        end_phase(t_last_root_);
+        work_ = work_last_root_;
+        start_phase(t_last_root_, y_last_root_);
+        t = t_restart_;
+        y = y_restart_;
+        continue;
+      }
       if (st == detail::CvodeSession::Status::Failure) {
         t = cur_->current_time();
         fail(Termination::SolverFailure, fmt::format("CVODE failed at t = {:.17g} in phase {}: {}",
@@ -648,11 +668,18 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
         break;
       }
       if (arming && st != detail::CvodeSession::Status::Root) {
-        // first step of a free phase after a release: arm the gap-minimum witness now
-        gap_rate_deferred_ = false;
-        build_witnesses();
-        cur_->set_roots(static_cast<int>(witnesses_.size()), dirs_.data());
+        // a free phase after a release: arm the gap-minimum witness once the gap is clearly
+        // opening (v_N above the velocity tolerance); until then a closing gap is still seen by
+        // the d_N witness, and only a touch-and-go without any crossing could pass unlogged
+        Vec7 q, v;
+        state_from(y, q, v);
+        if (m_.contact(q, v).v_N > v_tol_) {
+          gap_rate_deferred_ = false;
+          build_witnesses();
+          cur_->set_roots(static_cast<int>(witnesses_.size()), dirs_.data());
+        }
       }
+      if (st != detail::CvodeSession::Status::Root) root_without_restart_ = false;
       if (st == detail::CvodeSession::Status::Step) continue;
       if (st == detail::CvodeSession::Status::Reached) {
         emit_sample(t, y);
@@ -662,6 +689,7 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
         continue;
       }
       // Root return: find what fired.
+      root_without_restart_ = false;
       info.assign(witnesses_.size(), 0);
       cur_->root_info(info.data());
       bool restart_needed = false;
@@ -761,6 +789,12 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
         }
       }
       if (!ok) break;
+      if (!restart_needed) {
+        root_without_restart_ = true;
+        t_last_root_ = t;
+        y_last_root_ = y;
+        cur_->quadratures(work_last_root_.data());
+      }
       if (restart_needed) {
         // the event handler restarted the integration at its (polished) event time
         t = t_restart_;
