@@ -68,24 +68,26 @@ struct CvodeSession::Impl {
     return self->cb.quad(t, N_VGetArrayPointer(y), N_VGetArrayPointer(qd), self->cb.user);
   }
 
-  void collect() {
+  /// Adds the counters of the current integration (since the last restart) to s.
+  void add_current(CvodeStats& s) const {
     if (!started) return;
     long v = 0;
     CVodeGetNumSteps(mem, &v);
-    acc.steps += v;
+    s.steps += v;
     CVodeGetNumRhsEvals(mem, &v);
-    acc.rhs_evals += v;
+    s.rhs_evals += v;
     CVodeGetNumJacEvals(mem, &v);
-    acc.jac_evals += v;
+    s.jac_evals += v;
     CVodeGetNumGEvals(mem, &v);
-    acc.root_evals += v;
+    s.root_evals += v;
     CVodeGetNumNonlinSolvIters(mem, &v);
-    acc.newton_iters += v;
+    s.newton_iters += v;
     CVodeGetNumErrTestFails(mem, &v);
-    acc.err_test_fails += v;
+    s.err_test_fails += v;
     CVodeGetNumNonlinSolvConvFails(mem, &v);
-    acc.conv_fails += v;
+    s.conv_fails += v;
   }
+  void collect() { add_current(acc); }  // before a restart resets CVODE's counters
 
   ~Impl() {
     if (mem) CVodeFree(&mem);
@@ -233,25 +235,8 @@ double CvodeSession::current_time() const {
 }
 
 CvodeStats CvodeSession::stats() const {
-  auto& I = *impl_;
-  CvodeStats s = I.acc;
-  if (I.started) {
-    long v = 0;
-    CVodeGetNumSteps(I.mem, &v);
-    s.steps += v;
-    CVodeGetNumRhsEvals(I.mem, &v);
-    s.rhs_evals += v;
-    CVodeGetNumJacEvals(I.mem, &v);
-    s.jac_evals += v;
-    CVodeGetNumGEvals(I.mem, &v);
-    s.root_evals += v;
-    CVodeGetNumNonlinSolvIters(I.mem, &v);
-    s.newton_iters += v;
-    CVodeGetNumErrTestFails(I.mem, &v);
-    s.err_test_fails += v;
-    CVodeGetNumNonlinSolvConvFails(I.mem, &v);
-    s.conv_fails += v;
-  }
+  CvodeStats s = impl_->acc;
+  impl_->add_current(s);
   return s;
 }
 

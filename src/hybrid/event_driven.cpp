@@ -821,9 +821,7 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
   sum_.work_damping = work_[1];
   sum_.work_friction = work_[2];
   sum_.work_impacts = work_impacts_;
-  sum_.energy_residual =
-      (sum_.energy_final - sum_.energy_initial) -
-      (sum_.work_torque + sum_.work_damping + sum_.work_friction + sum_.work_impacts);
+  sum_.close_energy_balance();
   mon_.fill(sum_);
   const auto st = free_ ? free_->stats() : detail::CvodeStats{};
   const auto sc = contact_ ? contact_->stats() : detail::CvodeStats{};

@@ -498,8 +498,7 @@ RunSummary FixedStepRunner::run(const MechanicalState& init, double t_end) {
   // of a time-stepping scheme); it is written as friction work, impacts 0
   sum_.work_friction = work_contact;
   sum_.work_impacts = 0.0;
-  sum_.energy_residual = (sum_.energy_final - sum_.energy_initial) -
-                         (sum_.work_torque + sum_.work_damping + sum_.work_friction);
+  sum_.close_energy_balance();
   mon_.fill(sum_);
   if (qn_unconverged_ > 0 && sum_.message.empty())
     sum_.message = fmt::format("carp-qn: {} steps reached itmax = {}", qn_unconverged_, o_.itmax);

@@ -105,6 +105,11 @@ struct RunSummary {
   Termination termination = Termination::Completed;
   std::string message;
   bool complete() const { return termination == Termination::Completed; }
+  /// energy_residual = (E_final - E_initial) - (sum of the works): the one definition.
+  void close_energy_balance() {
+    energy_residual = (energy_final - energy_initial) -
+                      (work_torque + work_damping + work_friction + work_impacts);
+  }
 };
 
 /// Receives a run's output, in time order. Solvers hand out everything through a sink.

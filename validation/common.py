@@ -1,0 +1,48 @@
+"""Helpers shared by the validation scripts: running rubdyn into an output folder and reading
+it back, and naming the machine a table was measured on."""
+import csv
+import json
+import os
+import platform
+import subprocess
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+CASE = os.path.join(ROOT, "cases", "reference.toml")
+
+
+def machine():
+    """CPU model and architecture, for the tables' headers."""
+    cpu = "unknown CPU"
+    try:
+        with open("/proc/cpuinfo") as f:
+            cpu = next(l.split(":", 1)[1].strip() for l in f if l.startswith("model name"))
+    except (OSError, StopIteration):
+        pass
+    return "%s, %s, %d cores" % (cpu, platform.machine(), os.cpu_count() or 0)
+
+
+def run_case(rubdyn, folder, args, dt=1e-4):
+    """Runs `rubdyn run` on the reference case into folder; returns (summary dict, grid) with
+    grid[k] = (x_r, y_r, omega) at t = k dt (the output grid; event rows are skipped), and the
+    list of events as (t, kind)."""
+    subprocess.run([rubdyn, "run", CASE, "--out", folder, "--quiet"] + args, check=True,
+                   stdout=subprocess.DEVNULL)
+    with open(os.path.join(folder, "summary.json")) as f:
+        summary = json.load(f)
+    grid = {}
+    with open(os.path.join(folder, "timeseries.csv")) as f:
+        for r in csv.DictReader(f):
+            t = float(r["t"])
+            k = round(t / dt)
+            if abs(t - k * dt) < 1e-9 and k not in grid:
+                grid[k] = (float(r["x_r"]), float(r["y_r"]), float(r["omega"]))
+    with open(os.path.join(folder, "events.csv")) as f:
+        events = [(float(r["t"]), r["kind"]) for r in csv.DictReader(f)]
+    return summary, grid, events
+
+
+def write_csv(path, rows):
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
