@@ -131,7 +131,16 @@ class FixedStepRunner {
   Phase phase_ = Phase::Free, prev_phase_ = Phase::Free;
   std::string fail_;
   long qn_unconverged_ = 0;  // carp-qn steps that reached itmax (the run goes on; reported)
-  long mj_ambiguous_ = 0;    // local problems with several consistent solutions (reported)
+  long mj_ambiguous_ = 0;
+  ContactKinematics c_start_;       // contact kinematics at the start of the current step
+  Vec7 v_prev_ = Vec7::Zero();      // MJ: v_{i-1}, for the predictor
+  bool prev_impulse_free_ = false;  // MJ: the last step had no impulse (and exists)
+  Mat7 mj_inv_ = Mat7::Zero();      // MJ: inverse iteration matrix, reused across steps
+  Mat7 carp_inv_ = Mat7::Zero();    // carp-onevc: inverse prediction Jacobian, reused
+  bool carp_lu_valid_ = false;
+  int carp_lu_age_ = 0;
+  bool mj_lu_valid_ = false;
+  int mj_lu_age_ = 0;  // local problems with several consistent solutions (reported)
   long next_sample_ = 0;
   double next_t_out_ = 0;
 };
@@ -231,8 +240,8 @@ bool FixedStepRunner::carpenter_step(double t, bool qn) {
   Vec7 d = dq_prev_;
   d[TH] = acc_guess * h2 + dq_prev_[TH];
   Vec7 R;
-  auto correct = [&](Vec7& dd, const Eigen::PartialPivLU<Mat7>& lu, double& FN, double& FT,
-                     Phase& ph) {
+  // solve_mbar(b) returns M-bar^{-1} b for the correction
+  auto correct = [&](Vec7& dd, const auto& solve_mbar, double& FN, double& FT, Phase& ph) {
     const Vec7 qp = q_ + dd;
     const Vec7 vp = (dd + dq_prev_) / (2.0 * h);
     const ContactKinematics c = m_.contact(qp, vp);
@@ -241,7 +250,7 @@ bool FixedStepRunner::carpenter_step(double t, bool qn) {
     if (!(c.d_N < 0.0)) return;
     const double s = law_.mu > 0.0 ? (c.v_t > 0.0 ? 1.0 : (c.v_t < 0.0 ? -1.0 : 0.0)) : 0.0;
     const Vec7 CNT = c.W_N - law_.mu * s * c.W_T;
-    const Vec7 x = lu.solve(CNT);
+    const Vec7 x = solve_mbar(CNT);
     FN = -c.d_N / c.W_N.dot(x);
     FT = -law_.mu * s * FN;
     dd += x * FN;
@@ -250,29 +259,56 @@ bool FixedStepRunner::carpenter_step(double t, bool qn) {
   double FN = 0, FT = 0;
   Phase ph = Phase::Free;
   if (!qn) {
-    // Prediction: Newton on R(Delta) = 0 (1-2 iterations at h <= 1e-5).
-    // Converged when every component of the Newton step is below 1e-14 of the increment plus
-    // 1e-16 h (a velocity of 1e-16 m/s or rad/s: round-off), or when the step stops shrinking
-    // (round-off reached).
+    // Prediction: Newton on R(Delta) = 0. The Jacobian J = M/h^2 - dfdv/(2h) is factorised
+    // and reused across steps (refreshed every 32 steps, or when the iteration contracts
+    // slowly): the converged Delta solves R = 0 whatever the iteration matrix. Converged when
+    // the estimated remaining error (r / (1 - r) times the last step, r the contraction ratio)
+    // is below 1e-14 of the increment plus 1e-16 h (a velocity of 1e-16: round-off).
+    bool fresh = carp_lu_valid_ && ++carp_lu_age_ < 32;
     int it = 0;
-    double prev = 1e300;
+    double prev = 0.0;
     for (; it < 30; ++it) {
-      residual(d, R, true);
-      const Vec7 step = J.partialPivLu().solve(R);
+      residual(d, R, !fresh);
+      if (!fresh) {
+        carp_inv_ = J.partialPivLu().inverse();  // explicit inverse: see moreau_jean_step
+        carp_lu_valid_ = fresh = true;
+        carp_lu_age_ = 0;
+      }
+      const Vec7 step = carp_inv_ * R;
       d -= step;
       ++sum_.newton_iters;
-      const double norm = step.cwiseAbs().maxCoeff();
-      if ((step.array().abs() <= 1e-14 * d.array().abs() + 1e-16 * h).all()) break;
-      if (it >= 2 && norm >= 0.5 * prev) break;
+      const double norm = (step.array().abs() / (1e-14 * d.array().abs() + 1e-16 * h)).maxCoeff();
+      if (norm <= 1.0) break;
+      if (it >= 1) {
+        const double r = norm / prev;
+        if (r < 1.0 && r / (1.0 - r) * norm <= 1.0) break;
+        if (r > 0.1) fresh = false;      // slow contraction: refresh the Jacobian
+        if (it >= 3 && r >= 0.5) break;  // round-off reached
+      }
       prev = norm;
     }
     if (it == 30) {
       fail_ = fmt::format("carp-onevc: the prediction Newton did not converge at t = {:.17g}", t);
       return false;
     }
-    residual(d, R, true);  // M-bar at the predicted theta (Algorithm 1)
-    const Eigen::PartialPivLU<Mat7> lu(Mbar);
-    correct(d, lu, FN, FT, ph);
+    // Verification, and the correction with M-bar at the predicted theta (Algorithm 1) only
+    // when the prediction penetrates.
+    if (m_.contact(q_ + d, (d + dq_prev_) / (2.0 * h)).d_N < 0.0) {
+      residual(d, R, true);
+      // M-bar differs from the prediction Jacobian only in the spin column (by G v / 2h, ~1e-7
+      // of M / h^2 here): solve with M-bar by Richardson iteration preconditioned with the
+      // cached inverse Jacobian, to round-off (2-3 iterations), instead of factorising M-bar.
+      auto solve_mbar = [&](const Vec7& b) {
+        Vec7 x = carp_inv_ * b;
+        for (int k = 0; k < 20; ++k) {
+          const Vec7 dx = carp_inv_ * (b - Mbar * x);
+          x += dx;
+          if (dx.norm() <= 1e-15 * x.norm()) break;
+        }
+        return x;
+      };
+      correct(d, solve_mbar, FN, FT, ph);
+    }
   } else {
     // Quasi-Newton loop (Roques et al. 2010): prediction (one solve with M-bar at the current
     // spin), verification, correction, repeated until the increment settles.
@@ -283,7 +319,8 @@ bool FixedStepRunner::carpenter_step(double t, bool qn) {
       // each pass predicts the contact-free solution at the current spin from the last iterate
       // (exact in one solve, R being affine in Delta at fixed spin) and corrects it
       Vec7 dn = d - lu.solve(R);  // the contact-free solution at this spin (R is affine)
-      correct(dn, lu, FN, FT, ph);
+      correct(
+          dn, [&lu](const Vec7& b) { return Vec7(lu.solve(b)); }, FN, FT, ph);
       const Vec7 change = dn - d;
       d = dn;
       ++sum_.newton_iters;
@@ -328,32 +365,54 @@ bool FixedStepRunner::moreau_jean_step(double t, bool project) {
   const double h = h_, th = o_.theta, eta = o_.eta;
   Vec7 fi;
   m_.smooth_forces(t, q_, v_, fi);
-  const ContactKinematics ci = m_.contact(q_, v_);
+  const ContactKinematics& ci = c_start_ = m_.contact(q_, v_);
   const bool active = ci.normal_defined && ci.d_N + 0.5 * h * ci.v_N <= 0.0;
+  // Simplified Newton: the iteration matrix is factorised once per step (at the predictor) and
+  // kept while the iteration contracts fast; it is refreshed when the contraction ratio exceeds
+  // 0.1. The predictor extrapolates the last acceleration unless the last step had an impulse.
   Vec7 v = v_;
-  Mat7 M, dfdq, dfdv, dMa, Mt;
+  if (prev_impulse_free_) v += v_ - v_prev_;
+  Mat7 M, dfdq, dfdv, dMa;
   Vec7 f;
+  // the factorisation is kept across steps and refreshed every 32 steps or when the iteration
+  // contracts slowly: the converged (v, r) solves the step whatever the iteration matrix is
+  // (kept as an explicit inverse: a 7x7 product is cheaper than two triangular solves, and the
+  // converged solution does not depend on the iteration matrix)
+  const Mat7& Li = mj_inv_;
+  bool factorised = mj_lu_valid_ && ++mj_lu_age_ < 32;
+  Vec7 xN = Vec7::Zero(), xT = Vec7::Zero();
+  double A_NN = 0, A_NT = 0, A_TT = 0;
+  auto delassus = [&] {
+    xN = Li * ci.W_N;
+    xT = Li * ci.W_T;
+    A_NN = ci.W_N.dot(xN);
+    A_NT = ci.W_N.dot(xT);
+    A_TT = ci.W_T.dot(xT);
+  };
+  if (factorised && active) delassus();
   double rN = 0.0, rT = 0.0;
   Phase ph = Phase::Free;
   int it = 0;
-  double prev = 1e300;
+  double prev = 0.0;
   for (; it < 50; ++it) {
     const Vec7 q = q_ + h * ((1.0 - th) * v_ + th * v);
     const Vec7 qe = (1.0 - eta) * q_ + eta * q;
     m_.mass_matrix(qe, M);
     m_.smooth_forces(t + h, q, v, f);
-    m_.smooth_force_jacobians(t + h, q, v, dfdq, dfdv);
-    m_.mass_matrix_product_jacobian(qe, v - v_, dMa);
     const Vec7 Phi = M * (v - v_) - h * ((1.0 - th) * fi + th * f);
-    Mt = M + eta * h * th * dMa - h * th * (dfdv + h * th * dfdq);
-    const Eigen::PartialPivLU<Mat7> lu(Mt);
-    Vec7 vfree = v - lu.solve(Phi);
+    if (!factorised) {
+      m_.smooth_force_jacobians(t + h, q, v, dfdq, dfdv);
+      m_.mass_matrix_product_jacobian(qe, v - v_, dMa);
+      mj_inv_ = (M + eta * h * th * dMa - h * th * (dfdv + h * th * dfdq)).partialPivLu().inverse();
+      if (active) delassus();
+      factorised = mj_lu_valid_ = true;
+      mj_lu_age_ = 0;
+    }
+    const Vec7 vfree = v - Li * Phi;
     Vec7 vn = vfree;
     rN = rT = 0.0;
     ph = Phase::Free;
     if (active) {
-      const Vec7 xN = lu.solve(ci.W_N), xT = lu.solve(ci.W_T);
-      const double A_NN = ci.W_N.dot(xN), A_NT = ci.W_N.dot(xT), A_TT = ci.W_T.dot(xT);
       const double uN = ci.W_N.dot(vfree) + law_.e_n * ci.v_N;
       const double uT = ci.W_T.dot(vfree) + law_.e_t * ci.v_t;
       const LocalSolution sol = solve_local(A_NN, A_NT, A_TT, uN, uT, law_.mu);
@@ -373,11 +432,17 @@ bool FixedStepRunner::moreau_jean_step(double t, bool project) {
     const Vec7 change = vn - v;
     v = vn;
     ++sum_.newton_iters;
-    // converged: every component below 1e-14 relative plus 1e-15 m/s (or rad/s), or the
-    // correction stopped shrinking (round-off reached)
-    const double norm = change.cwiseAbs().maxCoeff();
-    if ((change.array().abs() <= 1e-14 * v.array().abs() + 1e-15).all()) break;
-    if (it >= 2 && norm >= 0.5 * prev) break;
+    // Converged when every component of the remaining error is below 1e-14 relative plus
+    // 1e-15 m/s (or rad/s). The remaining error of a contracting iteration with ratio r is
+    // estimated by r / (1 - r) times the last change.
+    const double norm = (change.array().abs() / (1e-14 * v.array().abs() + 1e-15)).maxCoeff();
+    if (norm <= 1.0) break;
+    if (it >= 1) {
+      const double r = norm / prev;
+      if (r < 1.0 && r / (1.0 - r) * norm <= 1.0) break;
+      if (r > 0.1) factorised = false;  // slow contraction: refresh the iteration matrix
+      if (it >= 3 && r >= 0.5) break;   // round-off reached
+    }
     prev = norm;
   }
   if (it == 50) {
@@ -397,6 +462,8 @@ bool FixedStepRunner::moreau_jean_step(double t, bool project) {
   }
   q_next_ = q;
   v_next_ = v;
+  v_prev_ = v_;
+  prev_impulse_free_ = rN == 0.0 && rT == 0.0;
   PN_ = rN;
   PT_ = rT;
   FN_ = rN / h;
@@ -443,7 +510,7 @@ RunSummary FixedStepRunner::run(const MechanicalState& init, double t_end) {
   double t = init.t;
   for (; i < last; ++i) {
     t = init.t + static_cast<double>(i) * h_;
-    const double vN_before = m_.contact(q_, v_).v_N;
+    if (carpenter) c_start_ = m_.contact(q_, v_);  // (Moreau-Jean computes it in its step)
     const bool ok = carpenter
                         ? carpenter_step(t, o_.scheme == FixedStepScheme::CarpQN)
                         : moreau_jean_step(t, o_.scheme == FixedStepScheme::MoreauJeanProjected);
@@ -461,7 +528,7 @@ RunSummary FixedStepRunner::run(const MechanicalState& init, double t_end) {
         sum_.message = fmt::format("non-finite state at t = {:.17g}", t);
         break;
       }
-      record(i, t, q_, v_, FN_, FT_, phase_, vN_before, PN_, PT_);
+      record(i, t, q_, v_, FN_, FT_, phase_, c_start_.v_N, PN_, PT_);
       q_rec = q_;
       v_rec = v_;
       const SmoothPower p1 = m_.smooth_power(t, q_, v_);
@@ -470,7 +537,10 @@ RunSummary FixedStepRunner::run(const MechanicalState& init, double t_end) {
         work_smooth_damp += 0.5 * h_ * (p0.damping + p1.damping);
       }
       p0 = p1;
-      work_contact += (FN_ * m_.contact(q_, v_).v_N + FT_ * m_.contact(q_, v_).v_t) * h_;
+      if (FN_ != 0.0) {
+        const ContactKinematics c = m_.contact(q_, v_);
+        work_contact += (FN_ * c.v_N + FT_ * c.v_t) * h_;
+      }
       q_ = q_next_;
     } else {
       if (!finite(q_next_, v_next_)) {
@@ -478,16 +548,18 @@ RunSummary FixedStepRunner::run(const MechanicalState& init, double t_end) {
         sum_.message = fmt::format("non-finite state at t = {:.17g}", t + h_);
         break;
       }
-      const Vec7 vmid = 0.5 * (v_ + v_next_);
-      const ContactKinematics cm = m_.contact(q_, vmid);
-      work_contact += PN_ * cm.v_N + PT_ * cm.v_t;
+      // work of the impulse with the mid-step velocity: r . W^T (v_i + v_{i+1}) / 2
+      if (PN_ != 0.0 || PT_ != 0.0) {
+        const Vec7 vmid = 0.5 * (v_ + v_next_);
+        work_contact += PN_ * c_start_.W_N.dot(vmid) + PT_ * c_start_.W_T.dot(vmid);
+      }
       q_ = q_next_;
       v_ = v_next_;
       const SmoothPower p1 = m_.smooth_power(t + h_, q_, v_);
       work_smooth_ext += 0.5 * h_ * (p0.external + p1.external);
       work_smooth_damp += 0.5 * h_ * (p0.damping + p1.damping);
       p0 = p1;
-      record(i + 1, t + h_, q_, v_, FN_, FT_, phase_, vN_before, PN_, PT_);
+      record(i + 1, t + h_, q_, v_, FN_, FT_, phase_, c_start_.v_N, PN_, PT_);
     }
   }
   sum_.t_reached = init.t + static_cast<double>(carpenter ? std::max(0L, i - 1) : i) * h_;
