@@ -13,5 +13,6 @@ using Action = std::function<int()>;
 void add_check_command(CLI::App& app, Action& action);
 void add_campbell_command(CLI::App& app, Action& action);
 void add_run_command(CLI::App& app, Action& action);
+void add_compare_command(CLI::App& app, Action& action);
 
 }  // namespace rubdyn::app

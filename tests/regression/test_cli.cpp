@@ -81,3 +81,23 @@ TEST_CASE("CLI: campbell writes campbell.csv - check prints - bad options exit 2
   CHECK(run("check " + kRef) == 0);
   CHECK(run("check " + kRef + " --set rotor.delta=0.6") == 2);
 }
+
+TEST_CASE("CLI: compare two runs of different tolerance - events matched - exit codes", "[cli]") {
+  const fs::path a = fresh_dir("cmpa"), b = fresh_dir("cmpb");
+  REQUIRE(run("run " + kRef + " --t-end 0.03 --quiet --out " + a.string()) == 0);
+  REQUIRE(run("run " + kRef + " --t-end 0.03 --rtol 1e-8 --atol 1e-10 --quiet --out " +
+              b.string()) == 0);
+  const fs::path json =
+      fs::temp_directory_path() / ("rubdyn-cmp-" + std::to_string(::getpid()) + ".json");
+  REQUIRE(run("compare " + a.string() + " " + b.string() + " --json " + json.string()) == 0);
+  std::ifstream in(json);
+  std::stringstream s;
+  s << in.rdbuf();
+  CHECK(s.str().find("\"unmatched_a\": []") != std::string::npos);
+  CHECK(s.str().find("\"omega\"") != std::string::npos);
+  CHECK(run("compare " + a.string() + " /nonexistent") == 2);
+  CHECK(run("compare " + a.string() + " " + b.string() + " --window 0.02 0.01") == 2);
+  fs::remove_all(a);
+  fs::remove_all(b);
+  fs::remove(json);
+}

@@ -1,0 +1,294 @@
+#include "rubdyn/analysis/compare.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace rubdyn {
+
+namespace {
+
+const char* const kStandard[] = {"omega", "x_r", "y_r", "x_s", "y_s", "d_N"};
+
+std::vector<std::string> split_csv(const std::string& line) {
+  std::vector<std::string> out;
+  std::string cur;
+  bool quoted = false;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char ch = line[i];
+    if (quoted) {
+      if (ch == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+        cur += '"';
+        ++i;
+      } else if (ch == '"') {
+        quoted = false;
+      } else {
+        cur += ch;
+      }
+    } else if (ch == '"') {
+      quoted = true;
+    } else if (ch == ',') {
+      out.push_back(cur);
+      cur.clear();
+    } else if (ch != '\r') {
+      cur += ch;
+    }
+  }
+  out.push_back(cur);
+  return out;
+}
+
+bool parse_number(const std::string& s, double& x) {
+  if (s.empty()) return false;
+  char* end = nullptr;
+  x = std::strtod(s.c_str(), &end);
+  return end && *end == '\0';
+}
+
+std::string timeseries_path(const std::string& path) {
+  return std::filesystem::is_directory(path) ? path + "/timeseries.csv" : path;
+}
+
+/// Linear interpolation of (t, v) at x (t sorted, possibly with repeated times: the later
+/// sample of a repeated time is used, i.e. the state just after an event).
+double interpolate(const std::vector<double>& t, const std::vector<double>& v, double x) {
+  auto it = std::upper_bound(t.begin(), t.end(), x);
+  if (it == t.begin()) return v.front();
+  const std::size_t j = static_cast<std::size_t>(it - t.begin());
+  if (j == t.size()) return v.back();
+  const std::size_t i = j - 1;
+  if (t[i] == x || t[j] == t[i]) return v[i];
+  const double w = (x - t[i]) / (t[j] - t[i]);
+  return v[i] + w * (v[j] - v[i]);
+}
+
+}  // namespace
+
+const std::vector<double>* Series::column(const std::string& name) const {
+  for (std::size_t c = 0; c < names.size(); ++c)
+    if (names[c] == name) return &values[c];
+  return nullptr;
+}
+
+Series read_series(const std::string& path) {
+  const std::string file = timeseries_path(path);
+  std::ifstream in(file);
+  if (!in) throw std::runtime_error(fmt::format("{}: cannot read", file));
+  Series s;
+  s.source = file;
+  std::string line;
+  if (!std::getline(in, line)) throw std::runtime_error(fmt::format("{}: empty file", file));
+  const auto header = split_csv(line);
+  int tcol = -1;
+  std::vector<int> numeric;  // candidate columns, decided on the first data row
+  for (std::size_t c = 0; c < header.size(); ++c)
+    if (header[c] == "t") tcol = static_cast<int>(c);
+  if (tcol < 0) throw std::runtime_error(fmt::format("{}:1: no column named t", file));
+  int lineno = 1;
+  std::vector<int> cols;
+  while (std::getline(in, line)) {
+    ++lineno;
+    if (line.empty()) continue;
+    const auto f = split_csv(line);
+    if (f.size() != header.size()) {
+      throw std::runtime_error(fmt::format("{}:{}: {} fields, the header has {}", file, lineno,
+                                           f.size(), header.size()));
+    }
+    if (cols.empty() && s.names.empty()) {
+      for (std::size_t c = 0; c < f.size(); ++c) {
+        double x;
+        if (static_cast<int>(c) != tcol && parse_number(f[c], x)) {
+          cols.push_back(static_cast<int>(c));
+          s.names.push_back(header[c]);
+        }
+      }
+      s.values.resize(cols.size());
+    }
+    double t;
+    if (!parse_number(f[tcol], t) || !std::isfinite(t)) {
+      throw std::runtime_error(
+          fmt::format("{}:{}: t = '{}' is not a finite number", file, lineno, f[tcol]));
+    }
+    if (!s.t.empty() && t < s.t.back()) {
+      throw std::runtime_error(fmt::format("{}:{}: t = {} decreases", file, lineno, t));
+    }
+    s.t.push_back(t);
+    for (std::size_t k = 0; k < cols.size(); ++k) {
+      double x;
+      if (!parse_number(f[cols[k]], x)) {
+        throw std::runtime_error(
+            fmt::format("{}:{}: {} = '{}' is not a number", file, lineno, s.names[k], f[cols[k]]));
+      }
+      s.values[k].push_back(x);
+    }
+  }
+  if (s.t.size() < 2) throw std::runtime_error(fmt::format("{}: fewer than two samples", file));
+  return s;
+}
+
+std::vector<TimedEvent> read_events(const std::string& path) {
+  std::vector<TimedEvent> out;
+  if (!std::filesystem::is_directory(path)) return out;
+  const std::string file = path + "/events.csv";
+  std::ifstream in(file);
+  if (!in) return out;
+  std::string line;
+  std::getline(in, line);
+  const auto header = split_csv(line);
+  int tc = -1, kc = -1;
+  for (std::size_t c = 0; c < header.size(); ++c) {
+    if (header[c] == "t") tc = static_cast<int>(c);
+    if (header[c] == "kind") kc = static_cast<int>(c);
+  }
+  if (tc < 0 || kc < 0)
+    throw std::runtime_error(fmt::format("{}:1: needs columns t and kind", file));
+  int lineno = 1;
+  while (std::getline(in, line)) {
+    ++lineno;
+    if (line.empty()) continue;
+    const auto f = split_csv(line);
+    double t;
+    if (static_cast<int>(f.size()) <= std::max(tc, kc) || !parse_number(f[tc], t)) {
+      throw std::runtime_error(fmt::format("{}:{}: malformed event row", file, lineno));
+    }
+    out.push_back({t, f[kc]});
+  }
+  return out;
+}
+
+double Comparison::max_event_shift() const {
+  double m = 0.0;
+  for (const auto& e : matched) m = std::max(m, std::abs(e.t_b - e.t_a));
+  return m;
+}
+
+Comparison compare_solutions(const Series& a, const Series& b, const std::vector<TimedEvent>& ea,
+                             const std::vector<TimedEvent>& eb,
+                             std::optional<std::pair<double, double>> window, double event_tol) {
+  Comparison c;
+  c.t0 = std::max(a.t.front(), b.t.front());
+  c.t1 = std::min(a.t.back(), b.t.back());
+  if (window) {
+    c.t0 = std::max(c.t0, window->first);
+    c.t1 = std::min(c.t1, window->second);
+  }
+  if (!(c.t1 > c.t0)) throw std::runtime_error("the two solutions do not overlap in the window");
+  std::vector<double> times;
+  for (const auto* s : {&a, &b})
+    for (double t : s->t)
+      if (t >= c.t0 && t <= c.t1) times.push_back(t);
+  std::sort(times.begin(), times.end());
+  times.erase(std::unique(times.begin(), times.end()), times.end());
+  c.points = times.size();
+  for (const char* name : kStandard) {
+    const auto* va = a.column(name);
+    const auto* vb = b.column(name);
+    if (!va || !vb) {
+      c.missing.push_back(name);
+      continue;
+    }
+    ColumnDiff d;
+    d.name = name;
+    double integral = 0.0, prev_e2 = 0.0;
+    for (std::size_t i = 0; i < times.size(); ++i) {
+      const double e = interpolate(a.t, *va, times[i]) - interpolate(b.t, *vb, times[i]);
+      if (std::abs(e) > d.sup) {
+        d.sup = std::abs(e);
+        d.t_sup = times[i];
+      }
+      if (i > 0) integral += 0.5 * (prev_e2 + e * e) * (times[i] - times[i - 1]);
+      prev_e2 = e * e;
+    }
+    d.rms = times.size() > 1 ? std::sqrt(integral / (times.back() - times.front())) : d.sup;
+    c.columns.push_back(d);
+  }
+  // events: greedy matching in time order per kind, inside the window
+  auto in_window = [&](const TimedEvent& e) {
+    return e.t >= c.t0 - event_tol && e.t <= c.t1 + event_tol;
+  };
+  std::vector<bool> used(eb.size(), false);
+  for (const auto& x : ea) {
+    if (!in_window(x)) continue;
+    int best = -1;
+    for (std::size_t j = 0; j < eb.size(); ++j) {
+      if (used[j] || eb[j].kind != x.kind || std::abs(eb[j].t - x.t) > event_tol) continue;
+      if (best < 0 || std::abs(eb[j].t - x.t) < std::abs(eb[best].t - x.t))
+        best = static_cast<int>(j);
+    }
+    if (best < 0) {
+      c.unmatched_a.push_back(x);
+    } else {
+      used[best] = true;
+      c.matched.push_back({x.kind, x.t, eb[best].t});
+    }
+  }
+  for (std::size_t j = 0; j < eb.size(); ++j)
+    if (!used[j] && in_window(eb[j])) c.unmatched_b.push_back(eb[j]);
+  return c;
+}
+
+std::string comparison_json(const Comparison& c, const std::string& a, const std::string& b) {
+  auto q = [](const std::string& s) {
+    std::string o = "\"";
+    for (char ch : s) o += (ch == '"' || ch == '\\') ? std::string("\\") + ch : std::string(1, ch);
+    return o + "\"";
+  };
+  std::string j = fmt::format(
+      "{{\n  \"a\": {},\n  \"b\": {},\n  \"t0\": {:.17g},\n  \"t1\": {:.17g},\n  \"points\": {},\n "
+      " \"columns\": {{",
+      q(a), q(b), c.t0, c.t1, c.points);
+  for (std::size_t i = 0; i < c.columns.size(); ++i) {
+    const auto& d = c.columns[i];
+    j += fmt::format("{}\n    \"{}\": {{\"sup\": {:.17g}, \"rms\": {:.17g}, \"t_sup\": {:.17g}}}",
+                     i ? "," : "", d.name, d.sup, d.rms, d.t_sup);
+  }
+  j += "\n  },\n  \"missing_columns\": [";
+  for (std::size_t i = 0; i < c.missing.size(); ++i) j += (i ? ", " : "") + q(c.missing[i]);
+  j += "],\n  \"matched_events\": [";
+  for (std::size_t i = 0; i < c.matched.size(); ++i) {
+    const auto& m = c.matched[i];
+    j += fmt::format(
+        "{}\n    {{\"kind\": {}, \"t_a\": {:.17g}, \"t_b\": {:.17g}, \"shift\": {:.17g}}}",
+        i ? "," : "", q(m.kind), m.t_a, m.t_b, m.t_b - m.t_a);
+  }
+  auto list = [&](const std::vector<TimedEvent>& v) {
+    std::string s = "[";
+    for (std::size_t i = 0; i < v.size(); ++i)
+      s += fmt::format("{}{{\"kind\": {}, \"t\": {:.17g}}}", i ? ", " : "", q(v[i].kind), v[i].t);
+    return s + "]";
+  };
+  j += fmt::format(
+      "\n  ],\n  \"max_event_shift\": {:.17g},\n  \"unmatched_a\": {},\n  \"unmatched_b\": "
+      "{}\n}}\n",
+      c.max_event_shift(), list(c.unmatched_a), list(c.unmatched_b));
+  return j;
+}
+
+std::string comparison_report(const Comparison& c, const std::string& a, const std::string& b) {
+  std::string r = fmt::format(
+      "compare  a = {}\n         b = {}\nwindow   [{:.9g}, {:.9g}] s, {} sample times\n", a, b,
+      c.t0, c.t1, c.points);
+  r += fmt::format("{:<8} {:>14} {:>14} {:>14}\n", "column", "sup |a - b|", "rms", "at t [s]");
+  for (const auto& d : c.columns)
+    r += fmt::format("{:<8} {:>14.6e} {:>14.6e} {:>14.9g}\n", d.name, d.sup, d.rms, d.t_sup);
+  if (!c.missing.empty()) {
+    r += "not compared (absent from one side):";
+    for (const auto& m : c.missing) r += " " + m;
+    r += "\n";
+  }
+  r += fmt::format("events   {} matched, max |shift| {:.3e} s; unmatched: {} in a, {} in b\n",
+                   c.matched.size(), c.max_event_shift(), c.unmatched_a.size(),
+                   c.unmatched_b.size());
+  for (const auto& e : c.unmatched_a)
+    r += fmt::format("  only in a: {} at {:.12g} s\n", e.kind, e.t);
+  for (const auto& e : c.unmatched_b)
+    r += fmt::format("  only in b: {} at {:.12g} s\n", e.kind, e.t);
+  return r;
+}
+
+}  // namespace rubdyn
