@@ -337,7 +337,11 @@ class Integrator {
 
   // Event handlers return false when the run must end.
   bool on_gap_closing(double t, Vec14 y, bool missed_crossing);
-  bool switch_on_constraint(double t, Vec14 y, EventRecord e, double rel_tol);
+  /// at_slip_zero: the event is the zero of v_t (slip ending): v_t is set to 0 exactly, whatever
+  /// its value at the located time (with a huge tangential acceleration the time resolution of
+  /// the root leaves |v_t| above the velocity tolerance).
+  bool switch_on_constraint(double t, Vec14 y, EventRecord e, double rel_tol,
+                            bool at_slip_zero = false);
   bool on_contact_witness(double t_root, const Vec14& y_root, Witness w);
   /// Value of a contact-phase witness (unscaled) at an interpolated state.
   double witness_value(Witness w, double t, const Vec14& y) const;
@@ -468,7 +472,8 @@ bool Integrator::on_gap_closing(double t, Vec14 y, bool missed_crossing) {
 
 /// On the constraint (d_N = 0): make v_N exactly 0, let the contact problem decide the phase,
 /// log the event and restart.
-bool Integrator::switch_on_constraint(double t, Vec14 y, EventRecord e, double rel_tol) {
+bool Integrator::switch_on_constraint(double t, Vec14 y, EventRecord e, double rel_tol,
+                                      bool at_slip_zero) {
   Vec7 q, v;
   state_from(y, q, v);
   project_position(q, v);
@@ -476,7 +481,7 @@ bool Integrator::switch_on_constraint(double t, Vec14 y, EventRecord e, double r
   ContactOperators op;
   compute_contact_operators(m_, t, q, v, op);
   const double T_before = m_.kinetic_energy(q, v);
-  const bool near_stick = law_.has_friction() && std::abs(op.c.v_t) <= v_tol_;
+  const bool near_stick = law_.has_friction() && (at_slip_zero || std::abs(op.c.v_t) <= v_tol_);
   project_velocity(op, near_stick ? 2 : 1, v);
   work_impacts_ += m_.kinetic_energy(q, v) - T_before;  // the (tiny) projection is an impulse
   compute_contact_operators(m_, t, q, v, op);
@@ -564,7 +569,7 @@ bool Integrator::on_contact_witness(double t_root, const Vec14& y_root, Witness 
   }
   // Decide with a band of 1e-7 relative: the witness is zero at the event to the accuracy of
   // the root location on the interpolant, so a margin of that size is a zero, not a sign.
-  return switch_on_constraint(t, y, e, 1e-7);
+  return switch_on_constraint(t, y, e, 1e-7, w == Witness::SlipSpeed);
 }
 
 RunSummary Integrator::run(const MechanicalState& init, double t_end) {

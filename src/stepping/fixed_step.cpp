@@ -132,6 +132,7 @@ class FixedStepRunner {
   std::string fail_;
   long qn_unconverged_ = 0;  // carp-qn steps that reached itmax (the run goes on; reported)
   long mj_ambiguous_ = 0;
+  bool painleve_ = false;           // Carpenter's correction needs F_N < 0 (ends the run)
   ContactKinematics c_start_;       // contact kinematics at the start of the current step
   Vec7 v_prev_ = Vec7::Zero();      // MJ: v_{i-1}, for the predictor
   bool prev_impulse_free_ = false;  // MJ: the last step had no impulse (and exists)
@@ -251,7 +252,14 @@ bool FixedStepRunner::carpenter_step(double t, bool qn) {
     const double s = law_.mu > 0.0 ? (c.v_t > 0.0 ? 1.0 : (c.v_t < 0.0 ? -1.0 : 0.0)) : 0.0;
     const Vec7 CNT = c.W_N - law_.mu * s * c.W_T;
     const Vec7 x = solve_mbar(CNT);
-    FN = -c.d_N / c.W_N.dot(x);
+    const double den = c.W_N.dot(x);
+    if (!(den > 0.0)) {
+      // the correction along C_NT would need F_N < 0 to close the gap: with this friction
+      // coefficient the sliding contact of the scheme is ill-posed (Painleve-type)
+      painleve_ = true;
+      return;
+    }
+    FN = -c.d_N / den;
     FT = -law_.mu * s * FN;
     dd += x * FN;
     ph = s > 0.0 ? Phase::SlipPos : (s < 0.0 ? Phase::SlipNeg : Phase::SlipPos);
@@ -327,6 +335,13 @@ bool FixedStepRunner::carpenter_step(double t, bool qn) {
       if ((change.array().abs() <= o_.qn_tol * d.array().abs() + 1e-16 * h).all()) break;
     }
     if (it == o_.itmax) ++qn_unconverged_;
+  }
+  if (painleve_) {
+    fail_ = fmt::format(
+        "{} at t = {:.17g}: C_N^T M-bar^-1 C_NT <= 0, the correction would need F_N < 0 "
+        "(sliding friction mu = {} is ill-posed for the scheme here)",
+        qn ? "carp-qn" : "carp-onevc", t, law_.mu);
+    return false;
   }
   if (!d.allFinite()) {
     fail_ = fmt::format("non-finite state at t = {:.17g}", t + h);
@@ -515,8 +530,10 @@ RunSummary FixedStepRunner::run(const MechanicalState& init, double t_end) {
                         ? carpenter_step(t, o_.scheme == FixedStepScheme::CarpQN)
                         : moreau_jean_step(t, o_.scheme == FixedStepScheme::MoreauJeanProjected);
     if (!ok) {
-      sum_.termination = fail_.find("non-finite") != std::string::npos ? Termination::NonFinite
-                                                                       : Termination::SolverFailure;
+      sum_.termination = painleve_ ? Termination::Painleve
+                         : fail_.find("non-finite") != std::string::npos
+                             ? Termination::NonFinite
+                             : Termination::SolverFailure;
       sum_.message = fail_;
       break;
     }

@@ -253,3 +253,25 @@ TEST_CASE("Event times converge as rtol decreases (block on a belt)", "[events]"
     prev = err;
   }
 }
+
+TEST_CASE("mu = 2: the slip-to-stick switch with a huge normal force ends in stick, not a loop",
+          "[events][rotor]") {
+  // Near the Painleve limit the normal force in slip reaches ~5e7 N and v_t falls so fast that
+  // the located zero of v_t leaves |v_t| ~ 3e-8 m/s, above the velocity tolerance: the switch
+  // must still be decided at v_t = 0 (it was a loop of 'stick' events staying in slip).
+  RotorStatorParams p;
+  p.contact.mu = 2.0;
+  const RotorStatorModel model(p);
+  MechanicalState s0;
+  s0.v[TH] = 2000.0;
+  MemorySink sink;
+  EventDrivenOptions opt;
+  const RunSummary s = run_event_driven(model, s0, 0.0067, opt, sink);
+  INFO(s.message);
+  REQUIRE(s.complete());
+  REQUIRE(sink.events.size() == 2);
+  CHECK(sink.events[0].kind == EventKind::Impact);
+  CHECK(sink.events[1].kind == EventKind::Stick);
+  CHECK(sink.events[1].phase_after == Phase::Stick);
+  CHECK(sink.events[1].v_t_plus == 0.0);
+}
