@@ -129,7 +129,8 @@ TEST_CASE("Labels are consistent along the grid: continuous curves - forward ris
   CHECK(d.back().f1b == Approx(88.0).margin(1.0));
 }
 
-TEST_CASE("Damped Campbell: positive damping ratios - frequencies close to undamped", "[campbell]") {
+TEST_CASE("Damped Campbell: positive damping ratios - frequencies close to undamped",
+          "[campbell]") {
   const RotorStatorParams p;
   const CampbellPoint u = campbell_point(p, 1000.0), dmp = campbell_point(p, 1000.0, true);
   REQUIRE(dmp.labels_ok);
