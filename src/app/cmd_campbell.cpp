@@ -1,11 +1,15 @@
-// rubdyn campbell CASE: Campbell diagram of the coupled rotor-stator system -> campbell.csv.
+// rubdyn campbell CASE: Campbell diagram of the coupled rotor-stator system -> DIR/campbell.csv.
 #include <fmt/format.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <memory>
+#include <numbers>
 #include <stdexcept>
 
+#include "cli_common.hpp"
 #include "commands.hpp"
 #include "rubdyn/analysis/campbell.hpp"
 #include "rubdyn/io/case_error.hpp"
@@ -16,46 +20,66 @@ namespace rubdyn::app {
 namespace {
 
 struct CampbellArgs {
-  std::string case_path, out;
-  std::vector<std::string> sets;
+  CaseArgs c;
+  std::string out;
   int points = 201;
-  double omega_max = 0.0;  // 0: run.omega_lim
+  double omega_max = 0.0;
+  bool omega_max_given = false;
   bool damped = false;
 };
 
-int campbell_command(const CampbellArgs& a) {
-  std::vector<CaseIssue> bad;
-  if (a.points < 2)
-    bad.push_back({"--points", 0, "--points", std::to_string(a.points), "must be >= 2"});
-  if (!(a.omega_max >= 0.0))
-    bad.push_back({"--omega-max", 0, "--omega-max", fmt::format("{}", a.omega_max), "must be > 0"});
-  if (!bad.empty()) throw CaseError(bad);
-  const CaseSpec spec = load_case(a.case_path, a.sets);
-  const double omega_max = a.omega_max > 0.0 ? a.omega_max : spec.run.omega_lim;
-  const auto d = campbell_diagram(spec.params, omega_max, a.points, a.damped);
-  for (const auto& c : d) {
-    if (!c.labels_ok) {
-      throw std::runtime_error(fmt::format(
-          "at omega = {} rad/s the modes are not two forward and two backward", c.omega));
-    }
+void print_point(const CampbellPoint& p, bool damped) {
+  std::printf("  Omega %9.2f rad/s (%8.0f rpm): f1b %8.3f  f1f %8.3f  f2b %8.3f  f2f %8.3f Hz\n",
+              p.omega, p.omega * 30.0 / std::numbers::pi, p.f1b, p.f1f, p.f2b, p.f2f);
+  if (damped) {
+    std::printf("  %37s zeta %8.5f      %8.5f      %8.5f      %8.5f\n", "", p.zeta_1b, p.zeta_1f,
+                p.zeta_2b, p.zeta_2f);
   }
+}
+
+int campbell_command(const CampbellArgs& a) {
+  // Every problem with the options and the case is reported at once; nothing is written.
+  std::vector<CaseIssue> bad;
+  if (a.points < 2) {
+    bad.push_back({"command line", 0, "--points", std::to_string(a.points), "must be >= 2"});
+  }
+  if (a.omega_max_given && !(std::isfinite(a.omega_max) && a.omega_max > 0.0)) {
+    bad.push_back({"command line", 0, "--omega-max", fmt::format("{}", a.omega_max),
+                   "must be finite and > 0 [rad/s]"});
+  }
+  CaseSpec spec;
+  try {
+    spec = load_case(a.c.path, a.c.sets);
+  } catch (const CaseError& e) {
+    bad.insert(bad.end(), e.issues().begin(), e.issues().end());
+  }
+  if (!bad.empty()) throw CaseError(bad);
+
+  const double omega_max = a.omega_max_given ? a.omega_max : spec.run.omega_lim;
+  const CampbellDiagram d = compute_campbell_diagram(spec.params, omega_max, a.points, a.damped);
+
   const std::string dir = a.out.empty() ? output_folder(spec) : a.out;
   std::filesystem::create_directories(dir);
-  const std::string path = dir + "/campbell.csv";
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (!f) throw std::runtime_error("cannot write " + path);
-  const std::string text = campbell_csv(d, a.damped);
-  std::fwrite(text.data(), 1, text.size(), f);
-  std::fclose(f);
-  const auto& z = d.front();
-  const auto& e = d.back();
-  std::printf("Campbell diagram of the coupled system (%d points, %s)\n", a.points,
-              a.damped ? "damped" : "undamped");
-  std::printf("  omega = %8.2f rad/s: f1b %8.3f  f1f %8.3f  f2b %8.3f  f2f %8.3f Hz\n", z.omega,
-              z.f1b, z.f1f, z.f2b, z.f2f);
-  std::printf("  omega = %8.2f rad/s: f1b %8.3f  f1f %8.3f  f2b %8.3f  f2f %8.3f Hz\n", e.omega,
-              e.f1b, e.f1f, e.f2b, e.f2f);
+  const std::string path = (std::filesystem::path(dir) / "campbell.csv").string();
+  {
+    std::ofstream f(path);
+    f << campbell_csv(d);
+    if (!f) throw std::runtime_error("cannot write " + path);
+  }
+
+  const CampbellSolver solver(spec.params, a.damped);
+  std::printf("Campbell diagram of %s: coupled rotor + stator, %s, %d speeds from 0 to %g rad/s\n",
+              spec.name.c_str(), a.damped ? "damped" : "undamped", a.points, omega_max);
+  print_point(solver.solve(0.0), a.damped);
+  print_point(solver.solve(omega_max), a.damped);
   std::printf("  written to %s\n", path.c_str());
+  if (!d.labels_ok()) {
+    std::fprintf(stderr,
+                 "rubdyn campbell: at %zu of %d speeds (first: %g rad/s) the modes are not two "
+                 "forward and two backward with a clear whirl (NaN or doubtful labels there)\n",
+                 d.unlabelled.size(), a.points, d.unlabelled.front());
+    return 3;
+  }
   return 0;
 }
 
@@ -63,14 +87,23 @@ int campbell_command(const CampbellArgs& a) {
 
 void add_campbell_command(CLI::App& app, Action& action) {
   auto a = std::make_shared<CampbellArgs>();
-  auto* sub = app.add_subcommand("campbell", "Campbell diagram of the coupled system");
-  sub->add_option("case", a->case_path, "Case file (TOML)")->required();
-  sub->add_option("--out", a->out, "output folder (default out/<case name>)");
-  sub->add_option("--points", a->points, "number of speeds from 0 to omega-max (default 201)");
-  sub->add_option("--omega-max", a->omega_max, "largest speed [rad/s] (default run.omega_lim)");
-  sub->add_flag("--damped", a->damped, "include the bearing and stator dampers");
-  sub->add_option("--set", a->sets, "override a case key: section.key=value (repeatable)");
-  sub->callback([a, &action] { action = [a] { return campbell_command(*a); }; });
+  auto* sub = app.add_subcommand(
+      "campbell",
+      "Campbell diagram of the coupled rotor-stator system (paper, section 5.1.2): the four "
+      "whirl-labelled frequencies f1b, f1f, f2b, f2f versus the spin speed, to DIR/campbell.csv");
+  add_case_options(*sub, a->c);
+  sub->add_option("--out", a->out, "output folder DIR (default: the case's output folder)");
+  sub->add_option("--points", a->points, "number of speeds from 0 to omega-max, >= 2")
+      ->capture_default_str();
+  auto* om = sub->add_option("--omega-max", a->omega_max,
+                             "largest speed [rad/s], > 0 (default: run.omega_lim of the case)");
+  sub->add_flag("--damped", a->damped,
+                "include the bearing and stator dampers: damped frequencies |Im lambda| / 2 pi "
+                "and damping ratios zeta_* in the CSV");
+  sub->callback([a, om, &action] {
+    a->omega_max_given = om->count() > 0;
+    action = [a] { return campbell_command(*a); };
+  });
 }
 
 }  // namespace rubdyn::app

@@ -1,9 +1,11 @@
-// rubdyn check CASE: validate a case and print its derived quantities.
-#include <cmath>
-#include <cstdio>
+// rubdyn check CASE: validate a case and print its derived quantities (analysis/derived.hpp).
+#include <fmt/format.h>
+
 #include <memory>
 #include <numbers>
+#include <string>
 
+#include "cli_common.hpp"
 #include "commands.hpp"
 #include "rubdyn/analysis/derived.hpp"
 #include "rubdyn/io/case_io.hpp"
@@ -12,43 +14,54 @@ namespace rubdyn::app {
 
 namespace {
 
-struct CheckArgs {
-  std::string case_path;
-  std::vector<std::string> sets;
-};
+void row(const std::string& label, double value, const std::string& unit) {
+  fmt::print("  {:<36}{:>14.6g} {}\n", label, value, unit);
+}
 
-int check_command(const CheckArgs& a) {
-  const CaseSpec c = load_case(a.case_path, a.sets);
-  const DerivedQuantities d = derive(c.params, c.initial.v0[4], c.run.omega_lim);
-  std::printf("case %s (%s): valid\n", c.name.c_str(), c.source.c_str());
-  std::printf("  l = L - delta      %12.6g m\n", d.l);
-  std::printf("  nu = d / l         %12.6g\n", d.nu);
-  std::printf("  M11, M12, M22      %12.6g %12.6g %12.6g kg\n", d.M11, d.M12, d.M22);
-  std::printf("  H = Jp / l^2       %12.6g kg\n", d.H);
-  std::printf("static equilibrium under gravity, at rest:\n");
-  std::printf("  bearing  y_b       %12.6g m\n", d.y_b);
+int check_command(const CaseArgs& a) {
+  const CaseSpec c = load_case(a.path, a.sets);  // throws CaseError: exit 2
+  const double omega0 = c.initial.v0[TH], omega_lim = c.run.omega_lim;
+  const DerivedQuantities d = compute_derived_quantities(c.params, omega0, omega_lim);
+  const double rpm = 30.0 / std::numbers::pi;
+
+  fmt::print("case {} ({}): valid\n", c.name, c.source);
+  fmt::print("geometry and inertia (paper eq. 9-11)\n");
+  row("l = L - delta", d.l, "m");
+  row("nu = d / l", d.nu, "-");
+  row("M11 = (1-nu)^2 m + Jd/l^2", d.M11, "kg");
+  row("M12 = nu (1-nu) m - Jd/l^2", d.M12, "kg");
+  row("M22 = nu^2 m + Jd/l^2", d.M22, "kg");
+  row("H = Jp / l^2", d.H, "kg");
+  fmt::print("static equilibrium under gravity, rotor at rest\n");
   if (d.rests_on_stator) {
-    std::printf("  the rotor rests on the stator (it pivots freely about the bearing):\n");
-    std::printf("  contact  F_N       %12.6g N  (nu m g)\n", d.F_N);
-    std::printf("  stator   y_s       %12.6g m\n", d.y_s);
-    std::printf("  rotor    y_r       %12.6g m  (y_s - g0)\n", d.y_r);
+    fmt::print(
+        "  the rotor pivots about its bearing and rests on the stator (bottom of the gap)\n");
+    row("contact force F_N = nu m g", d.F_N, "N");
+    row("bearing y_b = -(1-nu) m g / k_b", d.y_b, "m");
+    row("stator  y_s = -F_N / k_s", d.y_s, "m");
+    row("rotor   y_r = y_s - g0", d.y_r, "m");
   } else {
-    std::printf("  no gravity: the rotor stays centred, no contact\n");
+    fmt::print("  no gravity: the rotor stays centred, no contact (F_N = 0)\n");
   }
-  std::printf("natural frequencies at rest:\n");
-  std::printf("  coupled system     f1 %10.4f Hz, f2 %10.4f Hz (double modes)\n", d.f1, d.f2);
-  std::printf("  stator alone       %10.4f Hz\n", d.f_stator);
-  std::printf("  rotor on bearing   %10.4f Hz (and a 0 Hz pivot mode)\n", d.f_bearing_rotor);
-  std::printf("spin: omega0 = %.6g rad/s (%.6g rpm), omega_lim = %.6g rad/s (%.6g rpm)\n",
-              c.initial.v0[4], c.initial.v0[4] * 30 / std::numbers::pi, c.run.omega_lim,
-              c.run.omega_lim * 30 / std::numbers::pi);
-  if (std::isinf(d.t_free_to_omega_lim)) {
-    std::printf("  free acceleration never reaches omega_lim (tau_a <= 0)\n");
-  } else if (d.t_free_to_omega_lim == 0.0) {
-    std::printf("  omega0 is already at or above omega_lim\n");
-  } else {
-    std::printf("  free acceleration to omega_lim: %.6g s ((omega_lim - omega0) Jp / tau_a)\n",
-                d.t_free_to_omega_lim);
+  fmt::print("natural frequencies at rest\n");
+  row("coupled rotor + stator, f1 (double)", d.f1, "Hz");
+  row("coupled rotor + stator, f2 (double)", d.f2, "Hz");
+  row("stator alone, sqrt(k_s/m_s) / 2pi", d.f_stator, "Hz");
+  row("rotor on its bearing, no stator", d.f_bearing_rotor, "Hz (and 0 Hz: free pivot)");
+  fmt::print("spin speed\n");
+  row("omega0", omega0, fmt::format("rad/s = {:.6g} rpm", omega0 * rpm));
+  row("omega_lim", omega_lim, fmt::format("rad/s = {:.6g} rpm", omega_lim * rpm));
+  switch (d.free_acceleration) {
+    case FreeAcceleration::reaches:
+      row("free acceleration to omega_lim", d.t_free_to_omega_lim,
+          "s = (omega_lim - omega0) Jp / tau_a");
+      break;
+    case FreeAcceleration::already_reached:
+      fmt::print("  free acceleration: omega0 >= omega_lim, already reached (0 s)\n");
+      break;
+    case FreeAcceleration::never:
+      fmt::print("  free acceleration: never reaches omega_lim (tau_a <= 0)\n");
+      break;
   }
   return 0;
 }
@@ -56,10 +69,10 @@ int check_command(const CheckArgs& a) {
 }  // namespace
 
 void add_check_command(CLI::App& app, Action& action) {
-  auto a = std::make_shared<CheckArgs>();
-  auto* sub = app.add_subcommand("check", "Validate a case and print derived quantities");
-  sub->add_option("case", a->case_path, "Case file (TOML)")->required();
-  sub->add_option("--set", a->sets, "override a case key: section.key=value (repeatable)");
+  auto a = std::make_shared<CaseArgs>();
+  auto* sub = app.add_subcommand(
+      "check", "Validate a case and print its derived quantities (inertia, statics, frequencies)");
+  add_case_options(*sub, *a);
   sub->callback([a, &action] { action = [a] { return check_command(*a); }; });
 }
 

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_common.hpp"
 #include "commands.hpp"
 #include "rubdyn/core/report.hpp"
 #include "rubdyn/hybrid/event_driven.hpp"
@@ -22,8 +23,7 @@ namespace rubdyn::app {
 namespace {
 
 struct RunArgs {
-  std::string case_path;
-  std::vector<std::string> sets;
+  CaseArgs c;  // CASE and --set
   // kept as text: they become overrides of case keys and are validated (and reported) as such
   std::string solver, method, out, rtol, atol, t_end, h, output_every;
   bool quiet = false;
@@ -31,7 +31,7 @@ struct RunArgs {
 
 int run_command(const RunArgs& a) {
   // Command-line solver options are overrides of the case's keys: validated like the file.
-  std::vector<std::string> sets = a.sets;
+  std::vector<std::string> sets = a.c.sets;
   if (!a.solver.empty()) sets.push_back("solver.kind=" + a.solver);
   if (!a.method.empty()) sets.push_back("solver.method=" + a.method);
   if (!a.rtol.empty()) sets.push_back("solver.rtol=" + a.rtol);
@@ -40,7 +40,7 @@ int run_command(const RunArgs& a) {
   if (!a.t_end.empty()) sets.push_back("run.t_end=" + a.t_end);
   if (!a.output_every.empty()) sets.push_back("output.every=" + a.output_every);
   if (!a.out.empty()) sets.push_back("output.folder=\"" + a.out + "\"");
-  const CaseSpec spec = load_case(a.case_path, sets);  // throws CaseError: exit 2, nothing written
+  const CaseSpec spec = load_case(a.c.path, sets);  // throws CaseError: exit 2, nothing written
 
   const RotorStatorModel model(spec.params);
   MechanicalState s0;
@@ -102,7 +102,7 @@ int run_command(const RunArgs& a) {
 void add_run_command(CLI::App& app, Action& action) {
   auto a = std::make_shared<RunArgs>();
   auto* sub = app.add_subcommand("run", "Run a case and write its output folder");
-  sub->add_option("case", a->case_path, "Case file (TOML)")->required();
+  add_case_options(*sub, a->c);
   sub->add_option("--solver", a->solver, "event | carp-onevc | carp-qn | mj | mj-proj");
   sub->add_option("--method", a->method, "event solver, free flight: bdf | adams");
   sub->add_option("--rtol", a->rtol, "event solver: relative tolerance");
@@ -111,7 +111,6 @@ void add_run_command(CLI::App& app, Action& action) {
   sub->add_option("--output-every", a->output_every, "fixed-step schemes: write every N-th step");
   sub->add_option("--t-end", a->t_end, "end time [s] (overrides run.t_end)");
   sub->add_option("--out", a->out, "output folder (default out/<case name>)");
-  sub->add_option("--set", a->sets, "override a case key: section.key=value (repeatable)");
   sub->add_flag("--quiet", a->quiet, "no progress line");
   sub->callback([a, &action] { action = [a] { return run_command(*a); }; });
 }

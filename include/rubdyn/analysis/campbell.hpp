@@ -1,18 +1,37 @@
 #pragma once
 // Campbell diagram of the coupled rotor-stator system (paper, section 5.1.2, Fig. 8).
 //
-// The stator is tied to the rotor at R (x_s = x_r, y_s = y_r): its mass is added to M22 on x_r
+// Model. The stator is tied to the rotor at R (x_s = x_r, y_s = y_r): m_s is added to M22 on x_r
 // and y_r, k_s and c_s act on x_r and y_r. The spin theta' = Omega is imposed and the mass matrix
-// is taken at the centred position (H_x = H_y = 0: the theta row decouples). The 4-dof system
-//     M4 q'' + (Omega G4 + D4) q' + K4 q = 0,   q = (x_b, y_b, x_r, y_r),
-// has four modes of positive frequency. Forward and backward are told apart by the whirl of the
-// mode shape, not by sorting: for a mode q = Re(Q e^{i w t}) (w > 0) and a node with complex
-// amplitudes X, Y, the whirl z = x + i y splits into a forward part (X + iY) e^{i w t}/2 turning
-// with the spin (counterclockwise for Omega > 0) and a backward part (X - iY)^* e^{-i w t}/2;
-// a mode is forward when sum over both nodes of |X + iY|^2 exceeds that of |X - iY|^2. Within
-// each direction, index 1 is the lower frequency. At Omega = 0 the modes are double (any
-// combination of x and y is a mode): f1b = f1f and f2b = f2f there.
-#include <array>
+// is taken at the centred position (H_x = H_y = 0, eq. 14), so the theta row decouples. With
+// q = (x_b, y_b, x_r, y_r) and G4 the top-left 4x4 block of G (eq. 14):
+//     M4 q'' + (Omega G4 + D4) q' + K4 q = 0,
+//     M4 = [M11 I, M12 I; M12 I, (M22 + m_s) I],  K4 = diag(k_b, k_b, k_s, k_s),
+//     D4 = diag(c_b, c_b, c_s, c_s) (damped analysis only, else 0).
+// Eigenvalues lambda of the first-order (8x8) form; the four with Im(lambda) > 0 are the modes:
+// frequency f = Im(lambda) / 2 pi [Hz], damping ratio zeta = -Re(lambda) / |lambda|.
+//
+// Whirl direction (forward / backward). Spin theta' > 0 turns the rotor counterclockwise in the
+// (X, Y) plane (a right-handed rotation about +Z). For a mode q(t) = Re(Q e^{i w t}), w > 0, with
+// complex amplitudes X, Y at a node, the whirl z = x + i y is
+//     z(t) = (X + iY)/2 e^{+i w t} + conj(X - iY)/2 e^{-i w t}:
+// a forward circle of radius |X + iY|/2 (counterclockwise, with the spin) plus a backward circle
+// of radius |X - iY|/2. A mode is forward when its forward kinetic energy Z_f^H M2 Z_f exceeds the
+// backward one Z_b^H M2 Z_b, with Z_f = (X_b + iY_b, X_r + iY_r), Z_b = (X_b - iY_b, X_r - iY_r)
+// and M2 = [M11, M12; M12, M22 + m_s]: both nodes together, so a mode with a node (no motion) at R
+// or at B is still labelled, and the test does not depend on how the eigenvector is scaled. The
+// system is isotropic, so every mode is in fact purely forward or purely backward (in complex
+// coordinates it reads M2 z'' + (D2 - i Omega H S) z' + K2 z = 0, S = [1, -1; -1, 1]); a mode
+// whose whirl is mixed would reveal a bug and is reported (labels_ok = false).
+// Within each direction, index 1 is the lower frequency.
+//
+// Double modes. At Omega = 0 (and wherever a forward and a backward frequency cross) two modes
+// share one eigenvalue; its eigenspace is a plane in which ANY basis is a pair of modes, and the
+// eigenvectors an eigen solver returns there are an arbitrary, possibly ill-conditioned basis.
+// Such a numerically double eigenvalue (two eigenvalues closer than 1e-10 relative) is taken as
+// one forward and one backward mode, the circular basis of the plane, both at the common
+// frequency: this is the limit of the labelled modes as Omega -> 0, so the curves are continuous.
+#include <Eigen/Core>
 #include <string>
 #include <vector>
 
@@ -20,21 +39,65 @@
 
 namespace rubdyn {
 
+/// The four whirl-labelled modes at one spin speed.
 struct CampbellPoint {
-  double omega = 0.0;                         ///< spin speed [rad/s]
-  double f1b = 0, f1f = 0, f2b = 0, f2f = 0;  ///< frequencies [Hz]
-  double z1b = 0, z1f = 0, z2b = 0, z2f = 0;  ///< damping ratios (0 when undamped)
-  bool labels_ok = true;                      ///< exactly two forward and two backward modes found
+  double omega = 0.0;                                 ///< spin speed Omega [rad/s]
+  double f1b = 0.0, f1f = 0.0, f2b = 0.0, f2f = 0.0;  ///< frequencies [Hz] (NaN: mode missing)
+  double zeta_1b = 0.0, zeta_1f = 0.0, zeta_2b = 0.0, zeta_2f = 0.0;  ///< damping ratios [-]
+  int n_forward = 0, n_backward = 0;  ///< oscillating modes found in each direction
+  double min_whirl_purity = 1.0;      ///< min over modes of |E_f - E_b| / (E_f + E_b), 1: circular
+  /// Exactly two forward and two backward modes, each with an unambiguous whirl.
+  bool labels_ok = false;
 };
 
-/// The four frequencies (and damping ratios) at one spin speed. No allocation.
-CampbellPoint campbell_point(const RotorStatorParams& p, double omega, bool damped = false);
+/// The coupled 4-dof system, assembled once. solve() is cheap (one 8x8 real eigenproblem) and
+/// allocates nothing (fixed-size Eigen types only), so it can be called per sample of a run.
+class CampbellSolver {
+ public:
+  using Mat4 = Eigen::Matrix<double, 4, 4>;
 
-/// The diagram on a uniform grid of `points` speeds from 0 to omega_max.
-std::vector<CampbellPoint> campbell_diagram(const RotorStatorParams& p, double omega_max,
-                                            int points, bool damped = false);
+  /// damped = false: D4 = 0 (the paper's Campbell diagram); true: bearing and stator dampers.
+  explicit CampbellSolver(const RotorStatorParams& p, bool damped = false);
 
-/// campbell.csv text: omega_rad_s, omega_rpm, f1b, f1f, f2b, f2f [, zeta_1b, ...].
-std::string campbell_csv(const std::vector<CampbellPoint>& d, bool damped);
+  /// The four modes at spin speed omega [rad/s] (any sign; omega < 0 swaps the directions).
+  CampbellPoint solve(double omega) const;
+
+  bool damped() const { return damped_; }
+  const Mat4& M4() const { return M_; }  ///< [kg]
+  const Mat4& G4() const { return G_; }  ///< [kg], skew-symmetric; the force is Omega G4 q'
+  const Mat4& D4() const { return D_; }  ///< [N s/m], zero when undamped
+  const Mat4& K4() const { return K_; }  ///< [N/m]
+
+ private:
+  bool damped_;
+  double w_ref_;                    // time scale of the first-order form [rad/s]
+  Mat4 M_, G_, D_, K_;              // the coupled matrices
+  Mat4 MiK_, MiG_, MiD_;            // M4^-1 K4 / w_ref^2, M4^-1 G4 / w_ref, M4^-1 D4 / w_ref
+  Eigen::Matrix<double, 2, 2> M2_;  // per-direction mass matrix (whirl energies)
+};
+
+/// One-shot convenience: CampbellSolver(p, damped).solve(omega).
+CampbellPoint solve_campbell_point(const RotorStatorParams& p, double omega, bool damped = false);
+
+/// The diagram on a uniform grid.
+struct CampbellDiagram {
+  bool damped = false;
+  std::vector<double> omega;                               ///< grid [rad/s], from 0 to omega_max
+  std::vector<double> f1b, f1f, f2b, f2f;                  ///< [Hz], one value per grid point
+  std::vector<double> zeta_1b, zeta_1f, zeta_2b, zeta_2f;  ///< [-], empty when undamped
+  std::vector<double> unlabelled;  ///< grid speeds where labels_ok was false (should be none)
+
+  std::size_t size() const { return omega.size(); }
+  bool labels_ok() const { return unlabelled.empty(); }
+};
+
+/// `points` (>= 2) speeds Omega_i = omega_max i / (points - 1), omega_max > 0.
+/// Throws std::invalid_argument on points < 2 or omega_max not finite and > 0.
+CampbellDiagram compute_campbell_diagram(const RotorStatorParams& p, double omega_max,
+                                         int points = 201, bool damped = false);
+
+/// campbell.csv text: header omega_rad_s,omega_rpm,f1b,f1f,f2b,f2f (Hz) and, when damped,
+/// zeta_1b,zeta_1f,zeta_2b,zeta_2f; one row per grid point, 17 significant digits.
+std::string campbell_csv(const CampbellDiagram& d);
 
 }  // namespace rubdyn
