@@ -174,6 +174,14 @@ void CvodeSession::set_roots(int n_roots, const int* directions) {
 CvodeSession::Status CvodeSession::advance(double tout, double& t, double* y, bool one_step) {
   auto& I = *impl_;
   realtype tret = 0.0;
+  if (one_step && I.started) {
+    // After a root return the integrator may already be past tout (the root lies before tout,
+    // the step that found it ended after it). A further single step would leave tout outside
+    // the interpolation interval [tcur - hu, tcur]; in normal mode CVODE first searches the rest
+    // of the current step for roots, then interpolates at tout without stepping.
+    realtype tcur = 0.0;
+    if (CVodeGetCurrentTime(I.mem, &tcur) == CV_SUCCESS && tcur >= tout) one_step = false;
+  }
   const int flag = CVode(I.mem, tout, I.y, &tret, one_step ? CV_ONE_STEP : CV_NORMAL);
   t = tret;
   std::memcpy(y, N_VGetArrayPointer(I.y), sizeof(double) * I.n);

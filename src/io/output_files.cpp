@@ -86,12 +86,15 @@ OutputFolder::~OutputFolder() {
 
 void OutputFolder::sample(const Sample& s) {
   if (!ts_) return;
+  // Shortest representation that reads back to the same double ({} in fmt: Dragonbox), exact
+  // like %.17g but about 3x cheaper, which matters: at 0.1 ms output the rows cost as much as
+  // the event-driven integration of the reference case.
   fmt::memory_buffer b;
-  fmt::format_to(std::back_inserter(b), "{:.17g}", s.t);
-  for (int i = 0; i < kNumDofs; ++i) fmt::format_to(std::back_inserter(b), ",{:.17g}", s.q[i]);
-  for (int i = 0; i < kNumDofs; ++i) fmt::format_to(std::back_inserter(b), ",{:.17g}", s.v[i]);
-  fmt::format_to(std::back_inserter(b), ",{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{}\n", s.d_N,
-                 s.v_N, s.v_t, s.F_N, s.F_T, to_string(s.phase));
+  fmt::format_to(std::back_inserter(b), "{}", s.t);
+  for (int i = 0; i < kNumDofs; ++i) fmt::format_to(std::back_inserter(b), ",{}", s.q[i]);
+  for (int i = 0; i < kNumDofs; ++i) fmt::format_to(std::back_inserter(b), ",{}", s.v[i]);
+  fmt::format_to(std::back_inserter(b), ",{},{},{},{},{},{}\n", s.d_N, s.v_N, s.v_t, s.F_N, s.F_T,
+                 to_string(s.phase));
   std::fwrite(b.data(), 1, b.size(), ts_);
 }
 
