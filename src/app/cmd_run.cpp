@@ -12,11 +12,9 @@
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "rubdyn/core/report.hpp"
-#include "rubdyn/hybrid/event_driven.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/output_folder.hpp"
-#include "rubdyn/model/rotor_stator_model.hpp"
-#include "rubdyn/stepping/fixed_step.hpp"
+#include "rubdyn/io/simulate.hpp"
 
 namespace rubdyn::app {
 
@@ -42,11 +40,6 @@ int run_command(const RunArgs& a) {
   if (!a.out.empty()) sets.push_back("output.folder=\"" + a.out + "\"");
   const CaseSpec spec = load_case(a.c.path, sets);  // throws CaseError: exit 2, nothing written
 
-  const RotorStatorModel model(spec.params);
-  MechanicalState s0;
-  s0.q = spec.initial.q0;
-  s0.v = spec.initial.v0;
-
   const std::string dir = output_folder(spec);
   OutputFolder sink(dir, spec);
 
@@ -61,32 +54,8 @@ int run_command(const RunArgs& a) {
     std::fflush(stderr);
   };
 
-  RunSummary summary;
-  if (spec.solver.kind == "event") {
-    EventDrivenOptions opt;
-    opt.rtol = spec.solver.rtol;
-    opt.atol = spec.solver.atol;
-    opt.adams = spec.solver.method == "adams";
-    opt.output_dt = spec.output.dt;
-    opt.omega_lim = spec.run.omega_lim;
-    opt.max_events_per_second = spec.solver.max_events_per_second;
-    if (show_progress) opt.progress = progress;
-    summary = run_event_driven(model, s0, spec.run.t_end, opt, sink);
-  } else {
-    FixedStepOptions opt;
-    if (!parse_fixed_step_scheme(spec.solver.kind, opt.scheme)) {
-      throw std::runtime_error("unknown solver kind " + spec.solver.kind);
-    }
-    opt.h = spec.solver.h;
-    opt.itmax = spec.solver.itmax;
-    opt.qn_tol = spec.solver.qn_tol;
-    opt.theta = spec.solver.theta;
-    opt.eta = spec.solver.eta;
-    opt.output_every = spec.output.every;
-    opt.output_dt = spec.output.dt;
-    opt.omega_lim = spec.run.omega_lim;
-    summary = run_fixed_step(model, s0, spec.run.t_end, opt, sink);
-  }
+  const RunSummary summary =
+      simulate(spec, sink, show_progress ? ProgressFn(progress) : ProgressFn());
   if (show_progress) std::fprintf(stderr, "\r%80s\r", "");
   std::printf("%s", brief_report(summary).c_str());
   std::printf("output        %s/\n", dir.c_str());

@@ -14,5 +14,7 @@ void add_check_command(CLI::App& app, Action& action);
 void add_campbell_command(CLI::App& app, Action& action);
 void add_run_command(CLI::App& app, Action& action);
 void add_compare_command(CLI::App& app, Action& action);
+void add_analyze_command(CLI::App& app, Action& action);
+void add_sweep_commands(CLI::App& app, Action& action);
 
 }  // namespace rubdyn::app

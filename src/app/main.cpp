@@ -13,6 +13,8 @@ int main(int argc, char** argv) {
   rubdyn::app::add_campbell_command(app, action);
   rubdyn::app::add_run_command(app, action);
   rubdyn::app::add_compare_command(app, action);
+  rubdyn::app::add_analyze_command(app, action);
+  rubdyn::app::add_sweep_commands(app, action);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

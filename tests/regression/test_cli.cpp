@@ -101,3 +101,23 @@ TEST_CASE("CLI: compare two runs of different tolerance - events matched - exit 
   fs::remove_all(b);
   fs::remove(json);
 }
+
+TEST_CASE("CLI: analyze and sweep - bad input exits 2 and writes nothing - a run is analysed",
+          "[cli]") {
+  const fs::path dir = fresh_dir("sweep");
+  CHECK(run("analyze /nonexistent-folder") == 2);
+  CHECK(run("sweep " + kRef + " --vary contact.mu=0.1,abc --out " + dir.string()) == 2);
+  CHECK(run("sweep " + kRef + " --vary mu=0.1 --out " + dir.string()) == 2);
+  CHECK(run("sweep " + kRef + " --vary contact.mu=0.1 --shard 3/2 --out " + dir.string()) == 2);
+  CHECK(run("sweep-merge " + dir.string()) == 2);
+  CHECK_FALSE(fs::exists(dir));
+  const fs::path r = fresh_dir("analyze");
+  REQUIRE(run("run " + kRef + " --t-end 0.05 --out " + r.string()) == 0);
+  CHECK(run("analyze " + r.string() + " --overlap 1.5") == 2);
+  CHECK_FALSE(fs::exists(r / "analysis" / "analysis.json"));
+  CHECK(run("analyze " + r.string()) == 0);
+  for (const char* f :
+       {"derived.csv", "spectrum.csv", "spectrogram.csv", "campbell.csv", "analysis.json"})
+    CHECK(fs::exists(r / "analysis" / f));
+  fs::remove_all(r);
+}

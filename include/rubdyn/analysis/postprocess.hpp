@@ -1,0 +1,128 @@
+#pragma once
+// Post-processing of an output folder (rubdyn analyze; the paper's section 5 quantities). Reads
+// only the folder: timeseries.csv for the motion and case.resolved.toml for the parameters.
+//
+// Definitions (per output sample; Y up, spin theta' > 0 counterclockwise about +Z):
+//   s = r_r - r_s                   rotor centre relative to the stator centre (R plane)
+//   precession  Omega_p = (s_x s_y' - s_y s_x') / |s|^2  [rad/s]: the angular speed of the rotor
+//               orbit relative to the stator, positive in the spin direction (counterclockwise);
+//               undefined (NaN) while |s| < 1e-3 g0 (centred rotor: no orbit angle)
+//   precession ratio  Omega_p / omega
+//   whirl       forward if Omega_p omega > 0, backward if < 0 (none when undefined)
+//   regime      free, sliding (slip+ or slip-), rolling (stick)
+//   dry whip    backward whirl while sliding; dry whirl: backward whirl while rolling (rolling
+//               without slip whirls at -R_r omega / g0: 250 x the spin, backward, for the
+//               reference case)
+//   friction torque ratio  R_r F_T / tau_a: the friction torque about the shaft, positive when it
+//               brakes a positive spin (the generalised force on theta is -R_r F_T), over the
+//               driving torque
+//   d_N / g0    normalised gap
+// Time fractions are time-weighted over the run (each sample's state holds until the next
+// sample; the two rows written at an event time take no time).
+// Sustained whirl. The local precession changes sign whenever the rotor rocks to and fro in the
+// clearance (the reference case slides at the bottom of the stator doing just that), so a whirl
+// counts only when the orbit goes round: a run of consecutive samples in contact with the same
+// whirl direction is sustained when the orbit angle it covers, the integral of |Omega_p| dt
+// (trapezoidal; exact enough even when the whirl is faster than the sampling, since Omega_p
+// itself varies slowly), reaches 2 pi `min_turns`. Backward-whirl onset = start of the first
+// sustained backward run; whip onset = first sliding sample of a sustained backward run; the
+// whip and dry-whirl fractions split the sustained backward time by regime.
+//
+// Spectra of z = x_r + i y_r (the rotor orbit at R; negative frequencies = backward whirl): the
+// signal is resampled on a uniform grid (the most frequent sample spacing, linear interpolation
+// across event rows), a Hann window is applied and the amplitude |Z(f)| / sum(w) is given, so a
+// circular whirl a e^{i 2 pi f0 t} appears with amplitude a at f0 (up to the window's leakage).
+// The spectrogram uses frames of `window` seconds shifted by window (1 - overlap), each frame
+// zero-padded to at least `pad` times its length (a finer frequency grid, not a finer
+// resolution). Alongside it, the Campbell curves of the coupled system (analysis/campbell.hpp) at
+// the frame's mean spin speed, backward modes at negative frequency.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "rubdyn/core/run_types.hpp"
+#include "rubdyn/io/case_spec.hpp"
+
+namespace rubdyn {
+
+/// A run read back from its output folder.
+struct RunRecord {
+  std::string dir;
+  CaseSpec spec;                ///< case.resolved.toml
+  std::vector<Sample> samples;  ///< timeseries.csv, in file order
+  long events = 0;              ///< rows of events.csv (0 if absent)
+  bool complete = true;         ///< summary.json "complete" (false: ended early or absent)
+};
+/// Throws std::runtime_error naming the file, line and problem on a missing or bad file.
+RunRecord read_run(const std::string& dir);
+
+enum class Whirl { None, Forward, Backward };
+enum class Regime { Free, Sliding, Rolling };
+std::string_view to_string(Whirl w);
+std::string_view to_string(Regime r);
+
+struct DerivedSample {
+  double t = 0, omega = 0;
+  double precession = 0, precession_ratio = 0;  ///< NaN when undefined
+  Whirl whirl = Whirl::None;
+  Regime regime = Regime::Free;
+  double dN_over_g0 = 0, friction_torque_ratio = 0;
+  bool sustained = false;  ///< part of a sustained whirl run (set by verdicts())
+};
+
+struct AnalysisOptions {
+  double min_turns = 1.0;        ///< sustained whirl: orbit revolutions in one run (> 0)
+  double window = 0.04;          ///< spectrogram frame length [s]
+  double overlap = 0.75;         ///< spectrogram frame overlap, in [0, 1)
+  int pad = 4;                   ///< zero-padding factor of each frame (>= 1)
+  double f_max = 2000.0;         ///< frequencies kept in the spectra: |f| <= f_max [Hz]
+  std::optional<double> t0, t1;  ///< analysis window (default: the whole run)
+};
+
+struct RunVerdicts {
+  double t0 = 0, t1 = 0;  ///< the analysed window [s]
+  double omega_max = 0, omega_final = 0;
+  std::optional<double> t_omega_lim;  ///< first time omega >= omega_lim (interpolated)
+  bool limited = false;               ///< omega stayed below omega_lim over the window
+  double contact_fraction = 0, stick_fraction = 0;
+  double backward_fraction = 0;  ///< sustained backward whirl (in contact)
+  double whip_fraction = 0;      ///< sustained backward whirl, sliding
+  double whirl_fraction = 0;     ///< sustained backward whirl, rolling
+  double forward_fraction = 0;   ///< sustained forward whirl (in contact)
+  std::optional<double> backward_onset, whip_onset, whirl_onset;         ///< see the header comment
+  double max_friction_torque_ratio = 0, mean_friction_torque_ratio = 0;  ///< over the window
+  double min_dN_over_g0 = 0;                                             ///< < 0: penetration
+  long events = 0;  ///< rows of events.csv (every kind), whole run
+};
+
+struct Spectrum {
+  std::vector<double> f;          ///< [Hz], ascending, negative = backward
+  std::vector<double> amplitude;  ///< [m]
+};
+struct Spectrogram {
+  std::vector<double> t;                       ///< frame centres [s]
+  std::vector<double> omega;                   ///< mean spin speed of each frame [rad/s]
+  std::vector<double> f;                       ///< [Hz], ascending
+  std::vector<std::vector<double>> amplitude;  ///< amplitude[frame][k] [m]
+  /// Campbell frequencies at each frame's omega [Hz]: forward >= 0, backward <= 0.
+  std::vector<double> f1f, f2f, f1b, f2b;
+};
+
+std::vector<DerivedSample> derive(const RunRecord& r);
+/// Also marks d[i].sustained.
+RunVerdicts verdicts(const RunRecord& r, std::vector<DerivedSample>& d,
+                     const AnalysisOptions& o = {});
+/// Throws std::invalid_argument on fewer than 8 uniform samples in the window.
+Spectrum full_spectrum(const RunRecord& r, const AnalysisOptions& o = {});
+/// Throws std::invalid_argument on a window shorter than 8 samples or longer than the run, or on
+/// an overlap outside [0, 1).
+Spectrogram spectrogram(const RunRecord& r, const AnalysisOptions& o = {});
+
+/// Writes dir/analysis/{derived.csv, spectrum.csv, spectrogram.csv, campbell.csv,
+/// analysis.json} (or into out_dir); each file written to a temporary name and renamed, so a
+/// failure leaves no half-written file. Returns the verdicts.
+RunVerdicts write_analysis(const RunRecord& r, const AnalysisOptions& o,
+                           const std::string& out_dir = "");
+std::string verdicts_json(const RunVerdicts& v);
+
+}  // namespace rubdyn

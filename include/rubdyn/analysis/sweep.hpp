@@ -1,0 +1,89 @@
+#pragma once
+// Parametric sweeps (rubdyn sweep, rubdyn sweep-merge; the paper's section 5.2-5.3 studies).
+//
+// A sweep is the Cartesian product of variations of case keys ("contact.mu=0,0.1,0.2" or
+// "stator.k=1e6:8e6:8", eight values from 1e6 to 8e6 evenly spaced), the last variation varying
+// fastest; point i of the product is always the same point, so `--shard i/N` (points with
+// index % N == i - 1) splits a sweep deterministically across the tasks of a job array, and
+// sweep-merge joins their tables. Every point is validated as a case (file, key, value, rule)
+// before anything runs or is written. Points run in parallel on `jobs` threads with no shared
+// mutable state (each run builds its own model, solver and output folder) and are written to
+// OUT/pNNNN/ with their analysis (analysis/postprocess.hpp) in OUT/pNNNN/analysis/.
+//
+// Certified verdicts (--certify): each point is run again with a ten times finer step (fixed-step
+// schemes) or a hundred times tighter rtol and atol (event-driven) in OUT/pNNNN-tight/, and the
+// verdicts (speed limited or not, backward whirl or not, whip or not) of the two runs are
+// compared: "yes" when they agree, "no" when the verdict depends on the tolerance.
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "rubdyn/analysis/postprocess.hpp"
+
+namespace rubdyn {
+
+struct Variation {
+  std::string key;                  ///< section.key of the case file
+  std::vector<std::string> values;  ///< as TOML values (validated by the case loader)
+};
+/// "section.key=v1,v2,..." or "section.key=a:b:n" (n >= 2 evenly spaced values from a to b).
+/// Throws std::invalid_argument naming the text and the rule it breaks.
+Variation parse_variation(const std::string& text);
+
+struct Shard {
+  int index = 1, count = 1;  ///< 1 <= index <= count
+};
+/// "i/N" with 1 <= i <= N. Throws std::invalid_argument.
+Shard parse_shard(const std::string& text);
+
+struct SweepPoint {
+  long index = 0;
+  std::vector<std::string> values;  ///< one per variation
+  std::vector<std::string> overrides() const;
+  std::vector<std::string> keys;  ///< the variations' keys, same order
+};
+/// The Cartesian product, last variation fastest.
+std::vector<SweepPoint> sweep_points(const std::vector<Variation>& vary);
+
+struct SweepOptions {
+  std::string case_path;
+  std::vector<std::string> sets;  ///< overrides common to every point (--set)
+  std::vector<Variation> vary;
+  std::string out = "out/sweep";
+  int jobs = 1;
+  Shard shard;
+  bool certify = false;
+  AnalysisOptions analysis;
+  /// Called (from worker threads, serialised) after each point with (done, total).
+  std::function<void(long, long)> progress;
+};
+
+struct SweepRow {
+  SweepPoint point;
+  std::string termination;  ///< "completed", another termination, or "error"
+  std::string message;
+  bool complete = false;
+  RunVerdicts v;
+  double wall_seconds = 0;
+  std::string folder;
+  // --certify
+  bool certified_run = false;  ///< the tight run was made
+  std::string tight_termination;
+  RunVerdicts tight;
+  bool certified = false;  ///< verdicts agree (and both runs complete)
+};
+
+/// Validates every point (throws CaseError on the first bad one, before any output), runs this
+/// shard's points and writes OUT/sweep.csv (or OUT/sweep-shard-i-of-N.csv with a .json sidecar
+/// naming the total number of points). Returns the rows in point order.
+std::vector<SweepRow> run_sweep(const SweepOptions& o);
+
+/// The sweep table: point, the varied keys, termination, verdicts, certification.
+std::string sweep_csv(const std::vector<std::string>& keys, const std::vector<SweepRow>& rows,
+                      bool certify);
+
+/// Joins OUT/sweep-shard-*-of-N.csv into OUT/sweep.csv. Throws std::runtime_error naming the
+/// missing shard, the mismatching header or the missing points. Returns the number of rows.
+long merge_sweep_shards(const std::string& out);
+
+}  // namespace rubdyn

@@ -1,0 +1,504 @@
+#include "rubdyn/analysis/postprocess.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <stdexcept>
+#include <unsupported/Eigen/FFT>
+
+#include "rubdyn/analysis/campbell.hpp"
+#include "rubdyn/io/case_io.hpp"
+
+namespace rubdyn {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> out;
+  std::string cur;
+  bool quoted = false;
+  for (char ch : line) {
+    if (ch == '"') {
+      quoted = !quoted;
+    } else if (ch == ',' && !quoted) {
+      out.push_back(cur);
+      cur.clear();
+    } else if (ch != '\r') {
+      cur += ch;
+    }
+  }
+  out.push_back(cur);
+  return out;
+}
+
+double number(const std::string& s, const std::string& file, long line, const std::string& col) {
+  char* end = nullptr;
+  const double x = std::strtod(s.c_str(), &end);
+  if (s.empty() || end != s.c_str() + s.size()) {
+    throw std::runtime_error(
+        fmt::format("{}:{}: column {}: '{}' is not a number", file, line, col, s));
+  }
+  return x;
+}
+
+Phase phase_of(const std::string& s, const std::string& file, long line) {
+  for (int k = 0; k < kNumPhases; ++k) {
+    if (s == to_string(static_cast<Phase>(k))) return static_cast<Phase>(k);
+  }
+  throw std::runtime_error(fmt::format(
+      "{}:{}: column phase: '{}' is not a phase (free, slip+, slip-, stick)", file, line, s));
+}
+
+// Time-weighted fraction of [t0, t1] where pred(i) holds; sample i holds over [t_i, t_{i+1}).
+template <class Pred>
+double fraction(const std::vector<DerivedSample>& d, double t0, double t1, Pred pred) {
+  double acc = 0.0;
+  for (size_t i = 0; i + 1 < d.size(); ++i) {
+    const double a = std::max(d[i].t, t0), b = std::min(d[i + 1].t, t1);
+    if (b > a && pred(d[i])) acc += b - a;
+  }
+  return t1 > t0 ? acc / (t1 - t0) : 0.0;
+}
+
+// Marks the samples of sustained runs of `dir` whirl in contact (see the header).
+std::vector<char> sustained_runs(const std::vector<DerivedSample>& d, double t0, double t1,
+                                 Whirl dir, double min_turns) {
+  std::vector<char> mark(d.size(), 0);
+  auto in_run = [&](const DerivedSample& x) {
+    return x.regime != Regime::Free && x.whirl == dir && x.t >= t0 && x.t <= t1;
+  };
+  const double need = 2.0 * M_PI * min_turns;
+  size_t i = 0;
+  while (i < d.size()) {
+    if (!in_run(d[i])) {
+      ++i;
+      continue;
+    }
+    size_t j = i;
+    double angle = 0.0;
+    // extend while the next sample is in the run, or is a zero-length row before one that is
+    while (j + 1 < d.size()) {
+      size_t k = j + 1;
+      while (k + 1 < d.size() && !in_run(d[k]) && d[k + 1].t == d[k].t) ++k;
+      if (!in_run(d[k])) break;
+      angle += 0.5 * (std::abs(d[j].precession) + std::abs(d[k].precession)) * (d[k].t - d[j].t);
+      j = k;
+    }
+    if (angle >= need)
+      for (size_t k = i; k <= j; ++k)
+        if (in_run(d[k])) mark[k] = 1;
+    i = j + 1;
+  }
+  return mark;
+}
+
+// The window [t0, t1] of the options, clipped to the run.
+std::pair<double, double> window_of(const RunRecord& r, const AnalysisOptions& o) {
+  if (r.samples.empty()) throw std::invalid_argument(r.dir + ": timeseries.csv has no rows");
+  const double a = r.samples.front().t, b = r.samples.back().t;
+  const double t0 = std::max(a, o.t0.value_or(a)), t1 = std::min(b, o.t1.value_or(b));
+  if (!(t1 > t0)) {
+    throw std::invalid_argument(
+        fmt::format("analysis window [{}, {}] does not overlap the run [{}, {}]", o.t0.value_or(a),
+                    o.t1.value_or(b), a, b));
+  }
+  return {t0, t1};
+}
+
+// z = x_r + i y_r and omega on a uniform grid of spacing dt over [t0, t1].
+struct Uniform {
+  double t0 = 0, dt = 0;
+  std::vector<std::complex<double>> z;
+  std::vector<double> omega;
+};
+Uniform resample(const RunRecord& r, double t0, double t1) {
+  const auto& s = r.samples;
+  std::map<long long, long> count;  // spacing histogram in units of 1e-12 s
+  for (size_t i = 0; i + 1 < s.size(); ++i) {
+    const double h = s[i + 1].t - s[i].t;
+    if (h > 0) ++count[std::llround(h * 1e12)];
+  }
+  if (count.empty()) throw std::invalid_argument(r.dir + ": fewer than two sample times");
+  const auto mode = std::max_element(count.begin(), count.end(),
+                                     [](auto& a, auto& b) { return a.second < b.second; });
+  Uniform u;
+  u.t0 = t0;
+  u.dt = static_cast<double>(mode->first) * 1e-12;
+  const long n = static_cast<long>(std::floor((t1 - t0) / u.dt * (1 + 1e-12))) + 1;
+  u.z.resize(n);
+  u.omega.resize(n);
+  size_t j = 0;
+  for (long k = 0; k < n; ++k) {
+    const double t = t0 + static_cast<double>(k) * u.dt;
+    while (j + 2 < s.size() && s[j + 1].t <= t) ++j;
+    const Sample& a = s[j];
+    const Sample& b = s[std::min(j + 1, s.size() - 1)];
+    const double w = b.t > a.t ? std::clamp((t - a.t) / (b.t - a.t), 0.0, 1.0) : 0.0;
+    u.z[k] = {a.q[XR] + w * (b.q[XR] - a.q[XR]), a.q[YR] + w * (b.q[YR] - a.q[YR])};
+    u.omega[k] = a.v[TH] + w * (b.v[TH] - a.v[TH]);
+  }
+  return u;
+}
+
+// Hann-windowed, zero-padded FFT of z[first, first + len): amplitudes on ascending frequencies
+// (fftshift), |f| <= f_max.
+void windowed_fft(const std::vector<std::complex<double>>& z, long first, long len, int pad,
+                  double dt, double f_max, std::vector<double>& f, std::vector<double>& amp) {
+  long nfft = 1;
+  while (nfft < len * std::max(pad, 1)) nfft *= 2;
+  std::vector<std::complex<double>> in(nfft, {0.0, 0.0}), out;
+  double wsum = 0.0;
+  for (long k = 0; k < len; ++k) {
+    const double w =
+        len > 1 ? 0.5 - 0.5 * std::cos(2.0 * M_PI * static_cast<double>(k) / (len - 1)) : 1.0;
+    in[k] = w * z[first + k];
+    wsum += w;
+  }
+  Eigen::FFT<double> fft;
+  fft.fwd(out, in);
+  f.clear();
+  amp.clear();
+  const double df = 1.0 / (static_cast<double>(nfft) * dt);
+  for (long m = -nfft / 2; m < nfft / 2; ++m) {
+    const double fm = static_cast<double>(m) * df;
+    if (std::abs(fm) > f_max) continue;
+    const long idx = m < 0 ? m + nfft : m;
+    f.push_back(fm);
+    amp.push_back(std::abs(out[idx]) / wsum);
+  }
+}
+
+void write_atomic(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream f(tmp, std::ios::binary);
+    f << text;
+    if (!f) throw std::runtime_error("cannot write " + tmp);
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw std::runtime_error("cannot rename " + tmp + " to " + path + ": " + ec.message());
+}
+
+std::string opt_json(const std::optional<double>& x) {
+  return x ? fmt::format("{}", *x) : "null";
+}
+std::string num_json(double x) {
+  return std::isfinite(x) ? fmt::format("{}", x) : "null";
+}
+
+}  // namespace
+
+std::string_view to_string(Whirl w) {
+  switch (w) {
+    case Whirl::None: return "none";
+    case Whirl::Forward: return "forward";
+    case Whirl::Backward: return "backward";
+  }
+  return "?";
+}
+
+std::string_view to_string(Regime r) {
+  switch (r) {
+    case Regime::Free: return "free";
+    case Regime::Sliding: return "sliding";
+    case Regime::Rolling: return "rolling";
+  }
+  return "?";
+}
+
+RunRecord read_run(const std::string& dir) {
+  namespace fs = std::filesystem;
+  RunRecord r;
+  r.dir = dir;
+  const std::string case_path = (fs::path(dir) / "case.resolved.toml").string();
+  const std::string ts_path = (fs::path(dir) / "timeseries.csv").string();
+  if (!fs::is_directory(dir)) throw std::runtime_error(dir + ": not an output folder");
+  if (!fs::exists(case_path)) throw std::runtime_error(case_path + ": missing");
+  r.spec = load_case(case_path);
+  std::ifstream f(ts_path);
+  if (!f) throw std::runtime_error(ts_path + ": cannot open");
+  std::string line;
+  if (!std::getline(f, line)) throw std::runtime_error(ts_path + ":1: empty file");
+  const auto header = split(line);
+  static const char* kCols[] = {"t",    "x_b",  "y_b",  "x_r",  "y_r",  "theta", "x_s",
+                                "y_s",  "vx_b", "vy_b", "vx_r", "vy_r", "omega", "vx_s",
+                                "vy_s", "d_N",  "v_N",  "v_t",  "F_N",  "F_T",   "phase"};
+  std::vector<int> at(std::size(kCols), -1);
+  for (size_t c = 0; c < std::size(kCols); ++c) {
+    for (size_t h = 0; h < header.size(); ++h)
+      if (header[h] == kCols[c]) at[c] = static_cast<int>(h);
+    if (at[c] < 0) {
+      throw std::runtime_error(
+          fmt::format("{}:1: column '{}' missing (rubdyn output expected)", ts_path, kCols[c]));
+    }
+  }
+  long ln = 1;
+  while (std::getline(f, line)) {
+    ++ln;
+    if (line.empty()) continue;
+    const auto v = split(line);
+    if (v.size() != header.size()) {
+      throw std::runtime_error(
+          fmt::format("{}:{}: {} fields, header has {}", ts_path, ln, v.size(), header.size()));
+    }
+    Sample s;
+    auto num = [&](int c) { return number(v[at[c]], ts_path, ln, kCols[c]); };
+    s.t = num(0);
+    for (int i = 0; i < kNumDofs; ++i) {
+      s.q[i] = num(1 + i);
+      s.v[i] = num(8 + i);
+    }
+    s.d_N = num(15);
+    s.v_N = num(16);
+    s.v_t = num(17);
+    s.F_N = num(18);
+    s.F_T = num(19);
+    s.phase = phase_of(v[at[20]], ts_path, ln);
+    if (!r.samples.empty() && s.t < r.samples.back().t) {
+      throw std::runtime_error(fmt::format("{}:{}: t = {} goes back in time", ts_path, ln, s.t));
+    }
+    r.samples.push_back(s);
+  }
+  std::ifstream ev((fs::path(dir) / "events.csv").string());
+  if (ev) {
+    std::getline(ev, line);
+    while (std::getline(ev, line))
+      if (!line.empty()) ++r.events;
+  }
+  std::ifstream sj((fs::path(dir) / "summary.json").string());
+  std::string text((std::istreambuf_iterator<char>(sj)), std::istreambuf_iterator<char>());
+  r.complete = text.find("\"complete\": true") != std::string::npos;
+  return r;
+}
+
+std::vector<DerivedSample> derive(const RunRecord& r) {
+  const auto& p = r.spec.params;
+  const double g0 = p.stator.gap, R = p.rotor.radius, tau = p.loads.torque;
+  std::vector<DerivedSample> out;
+  out.reserve(r.samples.size());
+  for (const Sample& s : r.samples) {
+    DerivedSample d;
+    d.t = s.t;
+    d.omega = s.v[TH];
+    const double sx = s.q[XR] - s.q[XS], sy = s.q[YR] - s.q[YS];
+    const double vx = s.v[XR] - s.v[XS], vy = s.v[YR] - s.v[YS];
+    const double rho2 = sx * sx + sy * sy;
+    if (rho2 > 1e-6 * g0 * g0) {
+      d.precession = (sx * vy - sy * vx) / rho2;
+      d.precession_ratio = d.omega != 0.0 ? d.precession / d.omega : kNaN;
+      const double sgn = d.precession * (d.omega != 0.0 ? d.omega : 1.0);
+      d.whirl = sgn > 0 ? Whirl::Forward : sgn < 0 ? Whirl::Backward : Whirl::None;
+    } else {
+      d.precession = d.precession_ratio = kNaN;
+    }
+    d.regime = s.phase == Phase::Free    ? Regime::Free
+               : s.phase == Phase::Stick ? Regime::Rolling
+                                         : Regime::Sliding;
+    d.dN_over_g0 = s.d_N / g0;
+    d.friction_torque_ratio = tau != 0.0 ? R * s.F_T / tau : kNaN;
+    out.push_back(d);
+  }
+  return out;
+}
+
+RunVerdicts verdicts(const RunRecord& r, std::vector<DerivedSample>& d, const AnalysisOptions& o) {
+  if (!(o.min_turns > 0.0))
+    throw std::invalid_argument(fmt::format("min_turns {} must be > 0", o.min_turns));
+  const auto [t0, t1] = window_of(r, o);
+  RunVerdicts v;
+  v.t0 = t0;
+  v.t1 = t1;
+  v.events = r.events;
+  const double lim = r.spec.run.omega_lim;
+  v.omega_max = -std::numeric_limits<double>::infinity();
+  v.min_dN_over_g0 = std::numeric_limits<double>::infinity();
+  double torque_integral = 0.0;
+  for (size_t i = 0; i < d.size(); ++i) {
+    if (d[i].t < t0 || d[i].t > t1) continue;
+    v.omega_max = std::max(v.omega_max, d[i].omega);
+    v.omega_final = d[i].omega;
+    v.min_dN_over_g0 = std::min(v.min_dN_over_g0, d[i].dN_over_g0);
+    if (std::isfinite(d[i].friction_torque_ratio))
+      v.max_friction_torque_ratio =
+          std::max(v.max_friction_torque_ratio, d[i].friction_torque_ratio);
+    if (i + 1 < d.size()) {
+      const double a = d[i].t, b = std::min(d[i + 1].t, t1);
+      if (b > a && std::isfinite(d[i].friction_torque_ratio))
+        torque_integral += d[i].friction_torque_ratio * (b - a);
+    }
+    if (!v.t_omega_lim && d[i].omega >= lim) {
+      if (i > 0 && d[i - 1].omega < lim && d[i].t > d[i - 1].t && d[i - 1].t >= t0) {
+        const double w = (lim - d[i - 1].omega) / (d[i].omega - d[i - 1].omega);
+        v.t_omega_lim = d[i - 1].t + w * (d[i].t - d[i - 1].t);
+      } else {
+        v.t_omega_lim = d[i].t;
+      }
+    }
+  }
+  v.limited = !v.t_omega_lim.has_value();
+  v.mean_friction_torque_ratio = torque_integral / (t1 - t0);
+  auto contact = [](const DerivedSample& x) { return x.regime != Regime::Free; };
+  v.contact_fraction = fraction(d, t0, t1, contact);
+  v.stick_fraction = fraction(d, t0, t1, [](auto& x) { return x.regime == Regime::Rolling; });
+  const auto bwd = sustained_runs(d, t0, t1, Whirl::Backward, o.min_turns);
+  const auto fwd = sustained_runs(d, t0, t1, Whirl::Forward, o.min_turns);
+  for (size_t i = 0; i < d.size(); ++i) {
+    d[i].sustained = bwd[i] || fwd[i];
+    if (!bwd[i]) continue;
+    if (!v.backward_onset) v.backward_onset = d[i].t;
+    if (!v.whip_onset && d[i].regime == Regime::Sliding) v.whip_onset = d[i].t;
+    if (!v.whirl_onset && d[i].regime == Regime::Rolling) v.whirl_onset = d[i].t;
+  }
+  // fraction() sees the sample, not its index: mark through a parallel copy
+  std::vector<DerivedSample> b = d, f = d;
+  for (size_t i = 0; i < d.size(); ++i) {
+    b[i].sustained = bwd[i];
+    f[i].sustained = fwd[i];
+  }
+  auto sus = [](const DerivedSample& x) { return x.sustained; };
+  v.backward_fraction = fraction(b, t0, t1, sus);
+  v.whip_fraction =
+      fraction(b, t0, t1, [](auto& x) { return x.sustained && x.regime == Regime::Sliding; });
+  v.whirl_fraction =
+      fraction(b, t0, t1, [](auto& x) { return x.sustained && x.regime == Regime::Rolling; });
+  v.forward_fraction = fraction(f, t0, t1, sus);
+  return v;
+}
+
+Spectrum full_spectrum(const RunRecord& r, const AnalysisOptions& o) {
+  const auto [t0, t1] = window_of(r, o);
+  const Uniform u = resample(r, t0, t1);
+  if (u.z.size() < 8) throw std::invalid_argument("fewer than 8 samples for the spectrum");
+  Spectrum s;
+  windowed_fft(u.z, 0, static_cast<long>(u.z.size()), 1, u.dt, o.f_max, s.f, s.amplitude);
+  return s;
+}
+
+Spectrogram spectrogram(const RunRecord& r, const AnalysisOptions& o) {
+  if (!(o.overlap >= 0.0 && o.overlap < 1.0))
+    throw std::invalid_argument(fmt::format("overlap {} is outside [0, 1)", o.overlap));
+  if (o.pad < 1) throw std::invalid_argument(fmt::format("pad {} is below 1", o.pad));
+  const auto [t0, t1] = window_of(r, o);
+  const Uniform u = resample(r, t0, t1);
+  const long n = static_cast<long>(u.z.size());
+  const long len = std::lround(o.window / u.dt);
+  if (len < 8 || len > n) {
+    throw std::invalid_argument(
+        fmt::format("spectrogram window {} s is {} samples of {} s: needs 8 to {} (the run)",
+                    o.window, len, u.dt, n));
+  }
+  const long hop = std::max(1L, std::lround(static_cast<double>(len) * (1.0 - o.overlap)));
+  const CampbellSolver campbell(r.spec.params);
+  Spectrogram g;
+  std::vector<double> amp;
+  for (long first = 0; first + len <= n; first += hop) {
+    windowed_fft(u.z, first, len, o.pad, u.dt, o.f_max, g.f, amp);
+    double om = 0.0;
+    for (long k = first; k < first + len; ++k) om += u.omega[k];
+    om /= static_cast<double>(len);
+    g.t.push_back(u.t0 + (static_cast<double>(first) + 0.5 * static_cast<double>(len - 1)) * u.dt);
+    g.omega.push_back(om);
+    g.amplitude.push_back(amp);
+    const CampbellPoint c = campbell.solve(om);
+    g.f1f.push_back(c.f1f);
+    g.f2f.push_back(c.f2f);
+    g.f1b.push_back(-c.f1b);
+    g.f2b.push_back(-c.f2b);
+  }
+  return g;
+}
+
+std::string verdicts_json(const RunVerdicts& v) {
+  std::string j = "{\n";
+  auto field = [&](const char* k, const std::string& x, bool last = false) {
+    j += fmt::format("  \"{}\": {}{}\n", k, x, last ? "" : ",");
+  };
+  field("t0", num_json(v.t0));
+  field("t1", num_json(v.t1));
+  field("omega_max", num_json(v.omega_max));
+  field("omega_final", num_json(v.omega_final));
+  field("t_omega_lim", opt_json(v.t_omega_lim));
+  field("limited", v.limited ? "true" : "false");
+  field("contact_fraction", num_json(v.contact_fraction));
+  field("stick_fraction", num_json(v.stick_fraction));
+  field("backward_fraction", num_json(v.backward_fraction));
+  field("whip_fraction", num_json(v.whip_fraction));
+  field("whirl_fraction", num_json(v.whirl_fraction));
+  field("forward_fraction", num_json(v.forward_fraction));
+  field("backward_onset", opt_json(v.backward_onset));
+  field("whip_onset", opt_json(v.whip_onset));
+  field("whirl_onset", opt_json(v.whirl_onset));
+  field("max_friction_torque_ratio", num_json(v.max_friction_torque_ratio));
+  field("mean_friction_torque_ratio", num_json(v.mean_friction_torque_ratio));
+  field("min_dN_over_g0", num_json(v.min_dN_over_g0));
+  field("events", fmt::format("{}", v.events), true);
+  return j + "}\n";
+}
+
+RunVerdicts write_analysis(const RunRecord& r, const AnalysisOptions& o,
+                           const std::string& out_dir) {
+  namespace fs = std::filesystem;
+  // compute everything first: a bad option fails before any file is written
+  auto d = derive(r);
+  const RunVerdicts v = verdicts(r, d, o);
+  const Spectrum sp = full_spectrum(r, o);
+  // a run shorter than one spectrogram frame has no spectrogram (a short sweep point, say): the
+  // other results stand, and analysis.json says why the spectrogram is absent
+  std::string sg_note;
+  Spectrogram sg;
+  try {
+    sg = spectrogram(r, o);
+  } catch (const std::invalid_argument& e) {
+    if (o.overlap < 0.0 || o.overlap >= 1.0 || o.pad < 1) throw;  // a bad option is an error
+    sg_note = e.what();
+  }
+  const std::string dir = out_dir.empty() ? (fs::path(r.dir) / "analysis").string() : out_dir;
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw std::runtime_error("cannot create " + dir + ": " + ec.message());
+
+  fmt::memory_buffer b;
+  auto out = std::back_inserter(b);
+  fmt::format_to(out,
+                 "t,omega,precession,precession_ratio,whirl,regime,dN_over_g0,"
+                 "friction_torque_ratio,sustained\n");
+  for (const auto& x : d) {
+    fmt::format_to(out, "{},{},{},{},{},{},{},{},{}\n", x.t, x.omega, x.precession,
+                   x.precession_ratio, to_string(x.whirl), to_string(x.regime), x.dN_over_g0,
+                   x.friction_torque_ratio, x.sustained ? 1 : 0);
+  }
+  write_atomic((fs::path(dir) / "derived.csv").string(), fmt::to_string(b));
+  b.clear();
+  fmt::format_to(out, "f,amplitude\n");
+  for (size_t k = 0; k < sp.f.size(); ++k) fmt::format_to(out, "{},{}\n", sp.f[k], sp.amplitude[k]);
+  write_atomic((fs::path(dir) / "spectrum.csv").string(), fmt::to_string(b));
+  b.clear();
+  fmt::format_to(out, "t,f,amplitude\n");
+  for (size_t i = 0; i < sg.t.size(); ++i)
+    for (size_t k = 0; k < sg.f.size(); ++k)
+      fmt::format_to(out, "{},{},{}\n", sg.t[i], sg.f[k], sg.amplitude[i][k]);
+  write_atomic((fs::path(dir) / "spectrogram.csv").string(), fmt::to_string(b));
+  b.clear();
+  fmt::format_to(out, "t,omega,f1f,f2f,f1b,f2b\n");
+  for (size_t i = 0; i < sg.t.size(); ++i)
+    fmt::format_to(out, "{},{},{},{},{},{}\n", sg.t[i], sg.omega[i], sg.f1f[i], sg.f2f[i],
+                   sg.f1b[i], sg.f2b[i]);
+  write_atomic((fs::path(dir) / "campbell.csv").string(), fmt::to_string(b));
+  std::string json = verdicts_json(v);
+  json.insert(json.size() - 3, fmt::format(",\n  \"spectrogram\": \"{}\"",
+                                           sg_note.empty() ? "written" : "skipped: " + sg_note));
+  write_atomic((fs::path(dir) / "analysis.json").string(), json);
+  return v;
+}
+
+}  // namespace rubdyn

@@ -1,0 +1,373 @@
+#include "rubdyn/analysis/sweep.hpp"
+
+#include <fmt/format.h>
+
+#include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+
+#include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/output_folder.hpp"
+#include "rubdyn/io/simulate.hpp"
+
+namespace rubdyn {
+
+namespace {
+
+std::string trim(const std::string& s) {
+  const auto a = s.find_first_not_of(" \t");
+  if (a == std::string::npos) return "";
+  return s.substr(a, s.find_last_not_of(" \t") - a + 1);
+}
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::string cur;
+  std::istringstream in(s);
+  while (std::getline(in, cur, sep)) out.push_back(trim(cur));
+  if (!s.empty() && s.back() == sep) out.push_back("");
+  return out;
+}
+
+double parse_double(const std::string& s, const std::string& what) {
+  char* end = nullptr;
+  const double x = std::strtod(s.c_str(), &end);
+  if (s.empty() || end != s.c_str() + s.size() || !std::isfinite(x))
+    throw std::invalid_argument(fmt::format("{}: '{}' is not a finite number", what, s));
+  return x;
+}
+
+std::string opt_csv(const std::optional<double>& x) {
+  return x ? fmt::format("{}", *x) : "";
+}
+
+void write_atomic(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream f(tmp, std::ios::binary);
+    f << text;
+    if (!f) throw std::runtime_error("cannot write " + tmp);
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw std::runtime_error("cannot rename " + tmp + " to " + path + ": " + ec.message());
+}
+
+// Tighter solver settings for --certify, as case overrides.
+std::vector<std::string> tight_overrides(const CaseSpec& s) {
+  if (s.solver.kind == "event") {
+    return {fmt::format("solver.rtol={:.3e}", s.solver.rtol / 100.0),
+            fmt::format("solver.atol={:.3e}", s.solver.atol / 100.0)};
+  }
+  return {fmt::format("solver.h={:.6e}", s.solver.h / 10.0)};
+}
+
+struct OneRun {
+  std::string termination, message;
+  bool complete = false;
+  double wall = 0;
+  RunVerdicts v;
+};
+
+OneRun run_point(const CaseSpec& spec, const std::string& dir, const AnalysisOptions& ao) {
+  OneRun r;
+  try {
+    RunSummary s;
+    {
+      OutputFolder sink(dir, spec);
+      s = simulate(spec, sink);
+    }
+    r.termination = std::string(to_string(s.termination));
+    r.message = s.message;
+    r.complete = s.complete();
+    r.wall = s.wall_seconds;
+  } catch (const std::exception& e) {  // the output folder could not be written
+    r.termination = "error";
+    r.message = e.what();
+    return r;
+  }
+  try {
+    r.v = write_analysis(read_run(dir), ao);
+  } catch (const std::exception& e) {
+    r.termination = "error";
+    r.complete = false;
+    r.message = std::string("analysis: ") + e.what();
+  }
+  return r;
+}
+
+bool same_verdicts(const RunVerdicts& a, const RunVerdicts& b) {
+  return a.limited == b.limited && a.backward_onset.has_value() == b.backward_onset.has_value() &&
+         a.whip_onset.has_value() == b.whip_onset.has_value();
+}
+
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  std::string q = "\"";
+  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
+}
+
+}  // namespace
+
+Variation parse_variation(const std::string& text) {
+  const auto eq = text.find('=');
+  const std::string rule =
+      "expected SECTION.KEY=v1,v2,... or SECTION.KEY=a:b:n (n >= 2 values from a to b)";
+  if (eq == std::string::npos || eq == 0)
+    throw std::invalid_argument(fmt::format("--vary '{}': {}", text, rule));
+  Variation v;
+  v.key = trim(text.substr(0, eq));
+  const std::string rhs = trim(text.substr(eq + 1));
+  if (v.key.find('.') == std::string::npos)
+    throw std::invalid_argument(
+        fmt::format("--vary '{}': key '{}' has no section; {}", text, v.key, rule));
+  const auto colon = split(rhs, ':');
+  if (colon.size() == 3) {
+    const double a = parse_double(colon[0], "--vary " + text);
+    const double b = parse_double(colon[1], "--vary " + text);
+    const double n = parse_double(colon[2], "--vary " + text);
+    if (n < 2 || n != std::floor(n) || n > 100000)
+      throw std::invalid_argument(
+          fmt::format("--vary '{}': count {} must be an integer in [2, 100000]", text, colon[2]));
+    const int m = static_cast<int>(n);
+    for (int i = 0; i < m; ++i) v.values.push_back(fmt::format("{}", a + (b - a) * i / (m - 1.0)));
+    return v;
+  }
+  if (colon.size() != 1) throw std::invalid_argument(fmt::format("--vary '{}': {}", text, rule));
+  v.values = split(rhs, ',');
+  for (const auto& x : v.values)
+    if (x.empty())
+      throw std::invalid_argument(fmt::format("--vary '{}': empty value; {}", text, rule));
+  if (v.values.empty()) throw std::invalid_argument(fmt::format("--vary '{}': {}", text, rule));
+  return v;
+}
+
+Shard parse_shard(const std::string& text) {
+  static const std::regex re(R"(\s*(\d+)\s*/\s*(\d+)\s*)");
+  std::smatch m;
+  Shard s;
+  if (!std::regex_match(text, m, re) || (s.index = std::stoi(m[1])) < 1 ||
+      (s.count = std::stoi(m[2])) < s.index) {
+    throw std::invalid_argument(
+        fmt::format("--shard '{}': expected i/N with 1 <= i <= N (e.g. 3/8)", text));
+  }
+  return s;
+}
+
+std::vector<std::string> SweepPoint::overrides() const {
+  std::vector<std::string> out;
+  for (size_t k = 0; k < keys.size(); ++k) out.push_back(keys[k] + "=" + values[k]);
+  return out;
+}
+
+std::vector<SweepPoint> sweep_points(const std::vector<Variation>& vary) {
+  std::vector<SweepPoint> pts(1);
+  for (const auto& var : vary) {
+    std::vector<SweepPoint> next;
+    for (const auto& p : pts) {
+      for (const auto& x : var.values) {
+        SweepPoint q = p;
+        q.keys.push_back(var.key);
+        q.values.push_back(x);
+        next.push_back(q);
+      }
+    }
+    pts = std::move(next);
+  }
+  for (size_t i = 0; i < pts.size(); ++i) pts[i].index = static_cast<long>(i);
+  return pts;
+}
+
+std::string sweep_csv(const std::vector<std::string>& keys, const std::vector<SweepRow>& rows,
+                      bool certify) {
+  std::string s = "point";
+  for (const auto& k : keys) {
+    s += ',';
+    s += k;
+  }
+  s += ",termination,complete,omega_max,omega_final,t_omega_lim,limited,contact_fraction,"
+       "backward_fraction,backward_onset,whip_fraction,whip_onset,stick_fraction,"
+       "max_friction_torque_ratio,events,wall_seconds,folder";
+  if (certify)
+    s += ",certified,tight_termination,tight_limited,tight_backward,tight_whip,"
+         "tight_omega_max";
+  s += "\n";
+  for (const auto& r : rows) {
+    s += fmt::format("{}", r.point.index);
+    for (const auto& x : r.point.values) {
+      s += ',';  // (not "," + x: g++ 12 -Wrestrict false positive on operator+)
+      s += csv_field(x);
+    }
+    const auto& v = r.v;
+    s += fmt::format(",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}", r.termination,
+                     r.complete ? "yes" : "no", v.omega_max, v.omega_final, opt_csv(v.t_omega_lim),
+                     v.limited ? "yes" : "no", v.contact_fraction, v.backward_fraction,
+                     opt_csv(v.backward_onset), v.whip_fraction, opt_csv(v.whip_onset),
+                     v.stick_fraction, v.max_friction_torque_ratio, v.events, r.wall_seconds,
+                     csv_field(r.folder));
+    if (certify) {
+      const auto& t = r.tight;
+      s += fmt::format(",{},{},{},{},{},{}", r.certified ? "yes" : "no", r.tight_termination,
+                       t.limited ? "yes" : "no", t.backward_onset ? "yes" : "no",
+                       t.whip_onset ? "yes" : "no", t.omega_max);
+    }
+    s += "\n";
+  }
+  return s;
+}
+
+std::vector<SweepRow> run_sweep(const SweepOptions& o) {
+  namespace fs = std::filesystem;
+  const auto all = sweep_points(o.vary);
+  // validate every point first: a bad value stops the sweep before anything is written
+  std::vector<CaseSpec> specs;
+  specs.reserve(all.size());
+  for (const auto& p : all) {
+    auto sets = o.sets;
+    for (const auto& x : p.overrides()) sets.push_back(x);
+    specs.push_back(load_case(o.case_path, sets));
+  }
+  std::vector<size_t> mine;
+  for (size_t i = 0; i < all.size(); ++i)
+    if (static_cast<int>(i % static_cast<size_t>(o.shard.count)) == o.shard.index - 1)
+      mine.push_back(i);
+  std::vector<CaseSpec> tight;
+  if (o.certify) {
+    for (size_t i : mine) {
+      auto sets = o.sets;
+      for (const auto& x : all[i].overrides()) sets.push_back(x);
+      for (const auto& x : tight_overrides(specs[i])) sets.push_back(x);
+      tight.push_back(load_case(o.case_path, sets));
+    }
+  }
+  std::error_code ec;
+  fs::create_directories(o.out, ec);
+  if (ec) throw std::runtime_error("cannot create " + o.out + ": " + ec.message());
+
+  std::vector<SweepRow> rows(mine.size());
+  std::atomic<size_t> next{0};
+  std::mutex mtx;
+  long done = 0;
+  auto worker = [&] {
+    for (size_t k = next++; k < mine.size(); k = next++) {
+      const size_t i = mine[k];
+      SweepRow& row = rows[k];
+      row.point = all[i];
+      row.folder = (fs::path(o.out) / fmt::format("p{:04d}", i)).string();
+      const OneRun r = run_point(specs[i], row.folder, o.analysis);
+      row.termination = r.termination;
+      row.message = r.message;
+      row.complete = r.complete;
+      row.wall_seconds = r.wall;
+      row.v = r.v;
+      if (o.certify) {
+        const OneRun t = run_point(tight[k], row.folder + "-tight", o.analysis);
+        row.certified_run = true;
+        row.tight_termination = t.termination;
+        row.tight = t.v;
+        row.certified = r.complete && t.complete && same_verdicts(r.v, t.v);
+      }
+      std::lock_guard<std::mutex> lock(mtx);
+      ++done;
+      if (o.progress) o.progress(done, static_cast<long>(mine.size()));
+    }
+  };
+  const int n = std::max(1, std::min<int>(o.jobs, static_cast<int>(mine.size())));
+  std::vector<std::thread> pool;
+  for (int j = 1; j < n; ++j) pool.emplace_back(worker);
+  worker();
+  for (auto& t : pool) t.join();
+
+  std::vector<std::string> keys;
+  for (const auto& v : o.vary) keys.push_back(v.key);
+  const std::string table = sweep_csv(keys, rows, o.certify);
+  if (o.shard.count == 1) {
+    write_atomic((fs::path(o.out) / "sweep.csv").string(), table);
+  } else {
+    const std::string stem = fmt::format("sweep-shard-{}-of-{}", o.shard.index, o.shard.count);
+    write_atomic(
+        (fs::path(o.out) / (stem + ".json")).string(),
+        fmt::format("{{\"shard\": {}, \"shards\": {}, \"points_total\": {}, "
+                    "\"certify\": {}}}\n",
+                    o.shard.index, o.shard.count, all.size(), o.certify ? "true" : "false"));
+    write_atomic((fs::path(o.out) / (stem + ".csv")).string(), table);
+  }
+  return rows;
+}
+
+long merge_sweep_shards(const std::string& out) {
+  namespace fs = std::filesystem;
+  static const std::regex re(R"(sweep-shard-(\d+)-of-(\d+)\.csv)");
+  std::map<int, fs::path> shards;
+  int count = -1;
+  if (!fs::is_directory(out)) throw std::runtime_error(out + ": not a directory");
+  for (const auto& e : fs::directory_iterator(out)) {
+    std::smatch m;
+    const std::string name = e.path().filename().string();
+    if (!std::regex_match(name, m, re)) continue;
+    const int i = std::stoi(m[1]), n = std::stoi(m[2]);
+    if (count >= 0 && n != count)
+      throw std::runtime_error(
+          fmt::format("{}: shards of {} and of {} sweeps mixed", out, count, n));
+    count = n;
+    shards[i] = e.path();
+  }
+  if (count < 0) throw std::runtime_error(out + ": no sweep-shard-i-of-N.csv files");
+  std::string header, body;
+  std::map<long, std::string> lines;
+  long total = -1;
+  for (int i = 1; i <= count; ++i) {
+    if (!shards.count(i))
+      throw std::runtime_error(fmt::format("{}: shard {} of {} missing (sweep-shard-{}-of-{}.csv)",
+                                           out, i, count, i, count));
+    const fs::path side = fs::path(out) / fmt::format("sweep-shard-{}-of-{}.json", i, count);
+    std::ifstream js(side);
+    std::string text((std::istreambuf_iterator<char>(js)), std::istreambuf_iterator<char>());
+    static const std::regex tot(R"("points_total":\s*(\d+))");
+    std::smatch m;
+    if (!std::regex_search(text, m, tot))
+      throw std::runtime_error(side.string() + ": missing or without points_total");
+    const long t = std::stol(m[1]);
+    if (total >= 0 && t != total)
+      throw std::runtime_error(
+          fmt::format("{}: points_total {} differs from {} of shard 1", side.string(), t, total));
+    total = t;
+    std::ifstream f(shards[i]);
+    std::string line;
+    if (!std::getline(f, line)) throw std::runtime_error(shards[i].string() + ": empty");
+    if (header.empty()) header = line;
+    if (line != header)
+      throw std::runtime_error(shards[i].string() + ":1: header differs from shard 1's");
+    long ln = 1;
+    while (std::getline(f, line)) {
+      ++ln;
+      if (line.empty()) continue;
+      const long idx = std::stol(line.substr(0, line.find(',')));
+      if (lines.count(idx))
+        throw std::runtime_error(
+            fmt::format("{}:{}: point {} appears twice", shards[i].string(), ln, idx));
+      lines[idx] = line;
+    }
+  }
+  std::vector<long> missing;
+  for (long p = 0; p < total; ++p)
+    if (!lines.count(p)) missing.push_back(p);
+  if (!missing.empty())
+    throw std::runtime_error(fmt::format("{}: {} of {} points missing (first: {})", out,
+                                         missing.size(), total, missing.front()));
+  std::string text = header + "\n";
+  for (const auto& [idx, line] : lines) text += line + "\n";
+  write_atomic((fs::path(out) / "sweep.csv").string(), text);
+  return static_cast<long>(lines.size());
+}
+
+}  // namespace rubdyn

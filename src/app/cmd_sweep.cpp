@@ -1,0 +1,107 @@
+// rubdyn sweep CASE --vary KEY=VALUES ...: parametric sweeps in parallel, sharded for job arrays;
+// rubdyn sweep-merge DIR: joins the shards' tables.
+#include <unistd.h>
+
+#include <cstdio>
+#include <memory>
+#include <stdexcept>
+#include <thread>
+
+#include "cli_common.hpp"
+#include "commands.hpp"
+#include "rubdyn/analysis/sweep.hpp"
+
+namespace rubdyn::app {
+
+namespace {
+
+struct SweepArgs {
+  CaseArgs c;
+  std::vector<std::string> vary;
+  std::string out = "out/sweep", shard, solver, rtol, atol, h, t_end;
+  int jobs = 0;
+  bool certify = false, quiet = false;
+  double min_turns = 1.0;
+};
+
+int sweep_command(const SweepArgs& a) {
+  SweepOptions o;
+  o.case_path = a.c.path;
+  o.sets = a.c.sets;
+  if (!a.solver.empty()) o.sets.push_back("solver.kind=" + a.solver);
+  if (!a.rtol.empty()) o.sets.push_back("solver.rtol=" + a.rtol);
+  if (!a.atol.empty()) o.sets.push_back("solver.atol=" + a.atol);
+  if (!a.h.empty()) o.sets.push_back("solver.h=" + a.h);
+  if (!a.t_end.empty()) o.sets.push_back("run.t_end=" + a.t_end);
+  for (const auto& v : a.vary) o.vary.push_back(parse_variation(v));
+  if (o.vary.empty()) throw std::runtime_error("sweep: give at least one --vary");
+  if (!a.shard.empty()) o.shard = parse_shard(a.shard);
+  if (a.jobs < 0) throw std::runtime_error("--jobs must be >= 0 (0: all cores)");
+  o.jobs =
+      a.jobs > 0 ? a.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  o.out = a.out;
+  o.certify = a.certify;
+  o.analysis.min_turns = a.min_turns;
+  const bool tty = !a.quiet && isatty(fileno(stderr));
+  if (tty) {
+    o.progress = [](long done, long total) {
+      std::fprintf(stderr, "\r  sweep: %ld of %ld points done", done, total);
+      std::fflush(stderr);
+    };
+  }
+  const auto rows = run_sweep(o);
+  if (tty) std::fprintf(stderr, "\r%60s\r", "");
+  long bad = 0, uncertified = 0;
+  for (const auto& r : rows) {
+    if (!r.complete) {
+      ++bad;
+      std::fprintf(stderr, "rubdyn sweep: point %ld (%s) ended early: %s: %s\n", r.point.index,
+                   r.folder.c_str(), r.termination.c_str(), r.message.c_str());
+    }
+    if (o.certify && !r.certified) ++uncertified;
+  }
+  std::printf("sweep         %zu points run (%s), %ld ended early", rows.size(),
+              o.shard.count > 1 ? a.shard.c_str() : "all", bad);
+  if (o.certify) std::printf(", %ld verdicts depend on the tolerance", uncertified);
+  std::printf("\ntable         %s/%s\n", o.out.c_str(),
+              o.shard.count > 1 ? "sweep-shard-*.csv (join with rubdyn sweep-merge)" : "sweep.csv");
+  return bad > 0 ? 3 : 0;
+}
+
+}  // namespace
+
+void add_sweep_commands(CLI::App& app, Action& action) {
+  auto a = std::make_shared<SweepArgs>();
+  auto* sub = app.add_subcommand("sweep", "Run the Cartesian product of case variations");
+  add_case_options(*sub, a->c);
+  sub->add_option("--vary", a->vary,
+                  "SECTION.KEY=v1,v2,... or SECTION.KEY=a:b:n (repeatable; product)")
+      ->allow_extra_args(false);
+  sub->add_option("--jobs", a->jobs, "parallel runs (default: all cores)");
+  sub->add_option("--out", a->out, "sweep folder (default out/sweep)");
+  sub->add_option("--shard", a->shard, "run slice i of N only (i/N), for job arrays");
+  sub->add_flag("--certify", a->certify,
+                "re-run each point tighter and report whether its verdicts hold");
+  sub->add_option("--solver", a->solver, "event | carp-onevc | carp-qn | mj | mj-proj");
+  sub->add_option("--rtol", a->rtol, "event solver: relative tolerance");
+  sub->add_option("--atol", a->atol, "event solver: absolute tolerance on positions [m]");
+  sub->add_option("--h", a->h, "fixed-step schemes: time step [s]");
+  sub->add_option("--t-end", a->t_end, "end time [s]");
+  sub->add_option("--min-turns", a->min_turns,
+                  "sustained whirl: orbit revolutions in one run (default 1)");
+  sub->add_flag("--quiet", a->quiet, "no progress line");
+  sub->callback([a, &action] { action = [a] { return sweep_command(*a); }; });
+
+  auto out = std::make_shared<std::string>();
+  auto* merge = app.add_subcommand("sweep-merge", "Join the shard tables of a sweep folder");
+  merge->add_option("dir", *out, "sweep folder holding sweep-shard-i-of-N.csv")->required();
+  merge->callback([out, &action] {
+    action = [out] {
+      const long n = merge_sweep_shards(*out);
+      std::printf("merged        %ld points into %s/sweep.csv\n", n, out->c_str());
+      return 0;
+    };
+  });
+}
+
+}  // namespace rubdyn::app

@@ -1,0 +1,42 @@
+#include "rubdyn/io/simulate.hpp"
+
+#include <stdexcept>
+
+#include "rubdyn/hybrid/event_driven.hpp"
+#include "rubdyn/model/rotor_stator_model.hpp"
+#include "rubdyn/stepping/fixed_step.hpp"
+
+namespace rubdyn {
+
+RunSummary simulate(const CaseSpec& spec, OutputSink& sink, const ProgressFn& progress) {
+  const RotorStatorModel model(spec.params);
+  MechanicalState s0;
+  s0.q = spec.initial.q0;
+  s0.v = spec.initial.v0;
+  if (spec.solver.kind == "event") {
+    EventDrivenOptions opt;
+    opt.rtol = spec.solver.rtol;
+    opt.atol = spec.solver.atol;
+    opt.adams = spec.solver.method == "adams";
+    opt.output_dt = spec.output.dt;
+    opt.omega_lim = spec.run.omega_lim;
+    opt.max_events_per_second = spec.solver.max_events_per_second;
+    opt.progress = progress;
+    return run_event_driven(model, s0, spec.run.t_end, opt, sink);
+  }
+  FixedStepOptions opt;
+  if (!parse_fixed_step_scheme(spec.solver.kind, opt.scheme)) {
+    throw std::runtime_error("unknown solver kind " + spec.solver.kind);
+  }
+  opt.h = spec.solver.h;
+  opt.itmax = spec.solver.itmax;
+  opt.qn_tol = spec.solver.qn_tol;
+  opt.theta = spec.solver.theta;
+  opt.eta = spec.solver.eta;
+  opt.output_every = spec.output.every;
+  opt.output_dt = spec.output.dt;
+  opt.omega_lim = spec.run.omega_lim;
+  return run_fixed_step(model, s0, spec.run.t_end, opt, sink);
+}
+
+}  // namespace rubdyn

@@ -1,0 +1,222 @@
+// Post-processing and sweeps on constructed runs with known answers.
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "rubdyn/analysis/postprocess.hpp"
+#include "rubdyn/analysis/sweep.hpp"
+
+using namespace rubdyn;
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kRef = std::string(RUBDYN_SOURCE_DIR) + "/cases/reference.toml";
+
+fs::path tmp(const std::string& name) {
+  const fs::path p =
+      fs::temp_directory_path() / ("rubdyn-post-" + std::to_string(::getpid()) + "-" + name);
+  fs::remove_all(p);
+  fs::create_directories(p);
+  return p;
+}
+
+// An output folder whose rotor runs on the circle of radius a about the (fixed) stator centre at
+// angular speed w (w < 0: clockwise, backward for a positive spin), sampled every dt, in the
+// given phase, with F_T constant.
+fs::path circular_run(const std::string& name, double a, double w, double dt, int n,
+                      const char* phase, double F_T) {
+  const fs::path dir = tmp(name);
+  fs::copy_file(kRef, dir / "case.resolved.toml");
+  std::ofstream f(dir / "timeseries.csv");
+  f << "t,x_b,y_b,x_r,y_r,theta,x_s,y_s,vx_b,vy_b,vx_r,vy_r,omega,vx_s,vy_s,d_N,v_N,v_t,F_N,F_T,"
+       "phase\n";
+  f.precision(17);
+  for (int k = 0; k < n; ++k) {
+    const double t = k * dt;
+    const double x = a * std::cos(w * t), y = a * std::sin(w * t);
+    const double vx = -a * w * std::sin(w * t), vy = a * w * std::cos(w * t);
+    f << t << ",0,0," << x << "," << y << ",0,0,0,0,0," << vx << "," << vy << ",2000,0,0,"
+      << 2e-4 - a << ",0,0,1," << F_T << "," << phase << "\n";
+  }
+  return dir;
+}
+
+}  // namespace
+
+TEST_CASE("postprocess: a circular backward orbit - precession - whirl - spectrum peak", "[post]") {
+  // 2^12 samples at dt = 1e-4 s; f0 = -80 / (4096 dt) = -195.3 Hz lies on an FFT bin, where a
+  // Hann-windowed transform normalised by sum(w) returns the amplitude a exactly (up to
+  // round-off), and the spectrum peaks there.
+  const double dt = 1e-4, a = 1e-4;
+  const int n = 4096;
+  const double f0 = -80.0 / (n * dt), w = 2.0 * M_PI * f0;
+  const auto dir = circular_run("circle", a, w, dt, n, "slip-", 5.0);
+  const RunRecord r = read_run(dir.string());
+  REQUIRE(r.samples.size() == static_cast<size_t>(n));
+  auto d = derive(r);
+  // precession = w exactly (velocities written with 17 digits): relative 1e-12
+  for (const auto& x : d) {
+    REQUIRE(x.precession == Approx(w).epsilon(1e-12));
+    REQUIRE(x.whirl == Whirl::Backward);
+    REQUIRE(x.regime == Regime::Sliding);
+  }
+  // friction torque ratio = R_r F_T / tau_a = 0.05 * 5 / 20
+  CHECK(d[7].friction_torque_ratio == Approx(0.0125).epsilon(1e-15));
+  CHECK(d[7].dN_over_g0 == Approx(0.5).epsilon(1e-12));
+  const RunVerdicts v = verdicts(r, d);
+  // the orbit turns 80 times in the run: one sustained backward run covering the whole run
+  REQUIRE(v.backward_onset.has_value());
+  CHECK(*v.backward_onset == 0.0);
+  CHECK(v.whip_onset == v.backward_onset);
+  CHECK_FALSE(v.whirl_onset.has_value());
+  CHECK(v.backward_fraction == Approx(1.0).epsilon(1e-12));
+  CHECK(v.whip_fraction == Approx(1.0).epsilon(1e-12));
+  CHECK(v.forward_fraction == 0.0);
+  CHECK(v.contact_fraction == Approx(1.0).epsilon(1e-12));
+  CHECK(v.limited);  // omega = 2000 < omega_lim = 2110 throughout
+  AnalysisOptions o;
+  o.f_max = 1000.0;
+  const Spectrum s = full_spectrum(r, o);
+  const auto peak = std::max_element(s.amplitude.begin(), s.amplitude.end());
+  CHECK(s.f[peak - s.amplitude.begin()] == Approx(f0).epsilon(1e-12));
+  CHECK(*peak == Approx(a).epsilon(1e-9));
+  // spectrogram: every frame peaks at f0 (frames of 0.04 s, zero-padded: the bin nearest f0 is
+  // within half a bin, df = 1 / (pad * 0.04 s) / ... <= 6.25 Hz)
+  o.window = 0.04;
+  const Spectrogram g = spectrogram(r, o);
+  REQUIRE(g.t.size() >= 10);
+  for (const auto& amp : g.amplitude) {
+    const auto pk = std::max_element(amp.begin(), amp.end());
+    CHECK(std::abs(g.f[pk - amp.begin()] - f0) <= 0.5 * (g.f[1] - g.f[0]) + 1e-9);
+  }
+  // the Campbell overlay at omega = 2000: backward modes at negative frequency
+  CHECK(g.f1b[0] < 0.0);
+  CHECK(g.f1f[0] > 0.0);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("postprocess: rocking to and fro in contact is not a sustained whirl", "[post]") {
+  // the orbit angle oscillates by +-0.3 rad: the precession changes sign every half period and
+  // no run covers a full turn, so there is no whirl verdict (the reference case's persistent
+  // sliding at the bottom of the stator looks like this)
+  const fs::path dir = tmp("rocking");
+  fs::copy_file(kRef, dir / "case.resolved.toml");
+  std::ofstream f(dir / "timeseries.csv");
+  f << "t,x_b,y_b,x_r,y_r,theta,x_s,y_s,vx_b,vy_b,vx_r,vy_r,omega,vx_s,vy_s,d_N,v_N,v_t,F_N,F_T,"
+       "phase\n";
+  f.precision(17);
+  const double a = 2e-4, W = 2 * M_PI * 50;
+  for (int k = 0; k < 2000; ++k) {
+    const double t = k * 1e-4, phi = -M_PI / 2 + 0.3 * std::sin(W * t);
+    const double dphi = 0.3 * W * std::cos(W * t);
+    f << t << ",0,0," << a * std::cos(phi) << "," << a * std::sin(phi) << ",0,0,0,0,0,"
+      << -a * dphi * std::sin(phi) << "," << a * dphi * std::cos(phi) << ",2000,0,0,0,0,0,1,0,"
+      << "slip-\n";
+  }
+  f.close();
+  const RunRecord r = read_run(dir.string());
+  auto d = derive(r);
+  const RunVerdicts v = verdicts(r, d);
+  CHECK_FALSE(v.backward_onset.has_value());
+  CHECK(v.backward_fraction == 0.0);
+  CHECK(v.forward_fraction == 0.0);
+  CHECK(v.contact_fraction == Approx(1.0).epsilon(1e-12));
+  fs::remove_all(dir);
+}
+
+TEST_CASE("postprocess: bad folders are reported with the file and line", "[post]") {
+  CHECK_THROWS_WITH(read_run("/nonexistent/run"), Catch::Contains("not an output folder"));
+  const fs::path dir = tmp("bad");
+  fs::copy_file(kRef, dir / "case.resolved.toml");
+  std::ofstream(dir / "timeseries.csv")
+      << "t,x_b,y_b,x_r,y_r,theta,x_s,y_s,vx_b,vy_b,vx_r,vy_r,omega,vx_s,vy_s,d_N,v_N,v_t,F_N,F_T,"
+         "phase\n0,0,0,0,0,0,0,0,0,0,0,0,2000,0,0,0,0,0,0,0,free\n"
+         "1e-4,0,0,0,oops,0,0,0,0,0,0,0,2000,0,0,0,0,0,0,0,free\n";
+  CHECK_THROWS_WITH(read_run(dir.string()), Catch::Contains("timeseries.csv:3: column y_r"));
+  fs::remove_all(dir);
+}
+
+TEST_CASE("sweep: variations - points - shards parse and order deterministically", "[sweep]") {
+  const Variation a = parse_variation("contact.mu=0, 0.1,0.2");
+  CHECK(a.key == "contact.mu");
+  CHECK(a.values == std::vector<std::string>{"0", "0.1", "0.2"});
+  const Variation b = parse_variation("stator.k=1e6:4e6:4");
+  CHECK(b.values == std::vector<std::string>{"1000000", "2000000", "3000000", "4000000"});
+  CHECK_THROWS_WITH(parse_variation("mu=0.1"), Catch::Contains("has no section"));
+  CHECK_THROWS_WITH(parse_variation("contact.mu=0.1,,0.2"), Catch::Contains("empty value"));
+  CHECK_THROWS_WITH(parse_variation("stator.k=1:2:1.5"), Catch::Contains("integer in [2"));
+  CHECK_THROWS(parse_variation("contact.mu"));
+  const auto pts = sweep_points({a, b});
+  REQUIRE(pts.size() == 12);
+  CHECK(pts[5].index == 5);  // mu index 1, k index 1 (the last variation varies fastest)
+  CHECK(pts[5].overrides() == std::vector<std::string>{"contact.mu=0.1", "stator.k=2000000"});
+  const Shard s = parse_shard("2/3");
+  CHECK(s.index == 2);
+  CHECK(s.count == 3);
+  CHECK_THROWS(parse_shard("0/3"));
+  CHECK_THROWS(parse_shard("4/3"));
+  CHECK_THROWS(parse_shard("1-3"));
+}
+
+namespace {
+// sweep.csv without the wall-time and folder columns (which differ between runs by design)
+std::vector<std::string> stable_rows(const fs::path& csv) {
+  std::ifstream f(csv);
+  std::string line;
+  std::vector<std::string> out;
+  while (std::getline(f, line)) {
+    std::stringstream ss(line);
+    std::string cell, keep;
+    int c = 0;
+    while (std::getline(ss, cell, ',')) {
+      if (c != 16 && c != 17) keep += cell + "|";  // wall_seconds, folder (one varied key)
+      ++c;
+    }
+    out.push_back(keep);
+  }
+  return out;
+}
+}  // namespace
+
+TEST_CASE("sweep: parallel - sharded and merged tables equal the serial table", "[sweep]") {
+  const fs::path out1 = tmp("sweep-serial"), out2 = tmp("sweep-sharded");
+  SweepOptions o;
+  o.case_path = kRef;
+  o.sets = {"run.t_end=0.012", "solver.rtol=1e-8", "solver.atol=1e-10"};
+  o.vary = {parse_variation("contact.mu=0.05,0.1,0.3")};
+  o.out = out1.string();
+  o.jobs = 1;
+  const auto rows = run_sweep(o);
+  REQUIRE(rows.size() == 3);
+  for (const auto& r : rows) {
+    CHECK(r.complete);
+    CHECK(r.v.events >= 1);  // first impact at about 6 ms
+    CHECK(fs::exists(fs::path(r.folder) / "analysis" / "analysis.json"));
+  }
+  o.out = out2.string();
+  o.jobs = 2;
+  o.shard = parse_shard("1/2");
+  CHECK(run_sweep(o).size() == 2);  // points 0 and 2
+  CHECK_THROWS_WITH(merge_sweep_shards(out2.string()), Catch::Contains("shard 2 of 2 missing"));
+  o.shard = parse_shard("2/2");
+  CHECK(run_sweep(o).size() == 1);
+  CHECK(merge_sweep_shards(out2.string()) == 3);
+  const auto a = stable_rows(out1 / "sweep.csv"), b = stable_rows(out2 / "sweep.csv");
+  REQUIRE(a.size() == 4);
+  CHECK(a == b);
+  // a bad value stops the sweep before anything is written
+  const fs::path out3 = tmp("sweep-bad");
+  fs::remove_all(out3);
+  o.out = out3.string();
+  o.shard = {};
+  o.vary = {parse_variation("contact.mu=0.1,-1")};
+  CHECK_THROWS_WITH(run_sweep(o), Catch::Contains("contact.mu"));
+  CHECK_FALSE(fs::exists(out3));
+  fs::remove_all(out1);
+  fs::remove_all(out2);
+}
