@@ -693,7 +693,16 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
           next_out = init.t + static_cast<double>(++k_out) * opt_.output_dt;
         continue;
       }
-      // Root return: find what fired.
+      // Root return. In single-step mode (arming the gap-rate witness) the step that found the
+      // root may have passed output times before the root: write them first, interpolated on
+      // that step (CVODE's interpolant covers [t_n - h_u, t_n], which holds them), or the
+      // restart at the event would leave them behind the integrator.
+      while (next_out < t && next_out < t_end_) {
+        Vec14 yo;
+        cur_->dky(next_out, 0, yo.data());
+        emit_sample(next_out, yo);
+        next_out = init.t + static_cast<double>(++k_out) * opt_.output_dt;
+      }
       root_without_restart_ = false;
       info.assign(witnesses_.size(), 0);
       cur_->root_info(info.data());

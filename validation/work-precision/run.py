@@ -34,8 +34,9 @@ DT = 1e-4
 CASES = {"30ms": 0.03, "0.5s": 0.5}
 EVENT_RTOLS = ["1e-5", "1e-6", "1e-7", "1e-8", "1e-9", "1e-10", "1e-11", "1e-12"]
 FIXED = ["carp-onevc", "carp-qn", "mj", "mj-proj"]
-STEPS = {"30ms": ["1e-4", "3e-5", "1e-5", "3e-6", "1e-6", "3e-7", "1e-7", "3e-8"],
-         "0.5s": ["1e-4", "3e-5", "1e-5", "3e-6", "1e-6", "3e-7", "1e-7"]}
+# steps that divide the 0.1 ms output interval, so that every scheme writes the same grid
+STEPS = {"30ms": ["1e-4", "2e-5", "1e-5", "5e-6", "2e-6", "1e-6", "5e-7", "2e-7", "1e-7", "5e-8"],
+         "0.5s": ["1e-4", "2e-5", "1e-5", "5e-6", "2e-6", "1e-6", "5e-7", "2e-7", "1e-7"]}
 if QUICK:
     EVENT_RTOLS = ["1e-6", "1e-9", "1e-12"]
     STEPS = {"30ms": ["1e-5", "1e-6"], "0.5s": ["1e-5"]}
