@@ -9,39 +9,13 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "rubdyn/io/text_files.hpp"
+
 namespace rubdyn {
 
 namespace {
 
 const char* const kStandard[] = {"omega", "x_r", "y_r", "x_s", "y_s", "d_N"};
-
-std::vector<std::string> split_csv(const std::string& line) {
-  std::vector<std::string> out;
-  std::string cur;
-  bool quoted = false;
-  for (std::size_t i = 0; i < line.size(); ++i) {
-    const char ch = line[i];
-    if (quoted) {
-      if (ch == '"' && i + 1 < line.size() && line[i + 1] == '"') {
-        cur += '"';
-        ++i;
-      } else if (ch == '"') {
-        quoted = false;
-      } else {
-        cur += ch;
-      }
-    } else if (ch == '"') {
-      quoted = true;
-    } else if (ch == ',') {
-      out.push_back(cur);
-      cur.clear();
-    } else if (ch != '\r') {
-      cur += ch;
-    }
-  }
-  out.push_back(cur);
-  return out;
-}
 
 bool parse_number(const std::string& s, double& x) {
   if (s.empty()) return false;
@@ -83,7 +57,7 @@ Series read_series(const std::string& path) {
   s.source = file;
   std::string line;
   if (!std::getline(in, line)) throw std::runtime_error(fmt::format("{}: empty file", file));
-  const auto header = split_csv(line);
+  const auto header = split_csv_line(line);
   int tcol = -1;
   std::vector<int> numeric;  // candidate columns, decided on the first data row
   for (std::size_t c = 0; c < header.size(); ++c)
@@ -94,7 +68,7 @@ Series read_series(const std::string& path) {
   while (std::getline(in, line)) {
     ++lineno;
     if (line.empty()) continue;
-    const auto f = split_csv(line);
+    const auto f = split_csv_line(line);
     if (f.size() != header.size()) {
       throw std::runtime_error(fmt::format("{}:{}: {} fields, the header has {}", file, lineno,
                                            f.size(), header.size()));
@@ -139,7 +113,7 @@ std::vector<TimedEvent> read_events(const std::string& path) {
   if (!in) return out;
   std::string line;
   std::getline(in, line);
-  const auto header = split_csv(line);
+  const auto header = split_csv_line(line);
   int tc = -1, kc = -1;
   for (std::size_t c = 0; c < header.size(); ++c) {
     if (header[c] == "t") tc = static_cast<int>(c);
@@ -151,7 +125,7 @@ std::vector<TimedEvent> read_events(const std::string& path) {
   while (std::getline(in, line)) {
     ++lineno;
     if (line.empty()) continue;
-    const auto f = split_csv(line);
+    const auto f = split_csv_line(line);
     double t;
     if (static_cast<int>(f.size()) <= std::max(tc, kc) || !parse_number(f[tc], t)) {
       throw std::runtime_error(fmt::format("{}:{}: malformed event row", file, lineno));

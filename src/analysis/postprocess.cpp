@@ -15,30 +15,13 @@
 
 #include "rubdyn/analysis/campbell.hpp"
 #include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/text_files.hpp"
 
 namespace rubdyn {
 
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-std::vector<std::string> split(const std::string& line) {
-  std::vector<std::string> out;
-  std::string cur;
-  bool quoted = false;
-  for (char ch : line) {
-    if (ch == '"') {
-      quoted = !quoted;
-    } else if (ch == ',' && !quoted) {
-      out.push_back(cur);
-      cur.clear();
-    } else if (ch != '\r') {
-      cur += ch;
-    }
-  }
-  out.push_back(cur);
-  return out;
-}
 
 double number(const std::string& s, const std::string& file, long line, const std::string& col) {
   char* end = nullptr;
@@ -177,18 +160,6 @@ void windowed_fft(const std::vector<std::complex<double>>& z, long first, long l
   }
 }
 
-void write_atomic(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp, std::ios::binary);
-    f << text;
-    if (!f) throw std::runtime_error("cannot write " + tmp);
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw std::runtime_error("cannot rename " + tmp + " to " + path + ": " + ec.message());
-}
-
 std::string opt_json(const std::optional<double>& x) {
   return x ? fmt::format("{}", *x) : "null";
 }
@@ -229,7 +200,7 @@ RunRecord read_run(const std::string& dir) {
   if (!f) throw std::runtime_error(ts_path + ": cannot open");
   std::string line;
   if (!std::getline(f, line)) throw std::runtime_error(ts_path + ":1: empty file");
-  const auto header = split(line);
+  const auto header = split_csv_line(line);
   static const char* kCols[] = {"t",    "x_b",  "y_b",  "x_r",  "y_r",  "theta", "x_s",
                                 "y_s",  "vx_b", "vy_b", "vx_r", "vy_r", "omega", "vx_s",
                                 "vy_s", "d_N",  "v_N",  "v_t",  "F_N",  "F_T",   "phase"};
@@ -246,7 +217,7 @@ RunRecord read_run(const std::string& dir) {
   while (std::getline(f, line)) {
     ++ln;
     if (line.empty()) continue;
-    const auto v = split(line);
+    const auto v = split_csv_line(line);
     if (v.size() != header.size()) {
       throw std::runtime_error(
           fmt::format("{}:{}: {} fields, header has {}", ts_path, ln, v.size(), header.size()));
@@ -477,27 +448,27 @@ RunVerdicts write_analysis(const RunRecord& r, const AnalysisOptions& o,
                    x.precession_ratio, to_string(x.whirl), to_string(x.regime), x.dN_over_g0,
                    x.friction_torque_ratio, x.sustained ? 1 : 0);
   }
-  write_atomic((fs::path(dir) / "derived.csv").string(), fmt::to_string(b));
+  write_file_atomic((fs::path(dir) / "derived.csv").string(), fmt::to_string(b));
   b.clear();
   fmt::format_to(out, "f,amplitude\n");
   for (size_t k = 0; k < sp.f.size(); ++k) fmt::format_to(out, "{},{}\n", sp.f[k], sp.amplitude[k]);
-  write_atomic((fs::path(dir) / "spectrum.csv").string(), fmt::to_string(b));
+  write_file_atomic((fs::path(dir) / "spectrum.csv").string(), fmt::to_string(b));
   b.clear();
   fmt::format_to(out, "t,f,amplitude\n");
   for (size_t i = 0; i < sg.t.size(); ++i)
     for (size_t k = 0; k < sg.f.size(); ++k)
       fmt::format_to(out, "{},{},{}\n", sg.t[i], sg.f[k], sg.amplitude[i][k]);
-  write_atomic((fs::path(dir) / "spectrogram.csv").string(), fmt::to_string(b));
+  write_file_atomic((fs::path(dir) / "spectrogram.csv").string(), fmt::to_string(b));
   b.clear();
   fmt::format_to(out, "t,omega,f1f,f2f,f1b,f2b\n");
   for (size_t i = 0; i < sg.t.size(); ++i)
     fmt::format_to(out, "{},{},{},{},{},{}\n", sg.t[i], sg.omega[i], sg.f1f[i], sg.f2f[i],
                    sg.f1b[i], sg.f2b[i]);
-  write_atomic((fs::path(dir) / "campbell.csv").string(), fmt::to_string(b));
+  write_file_atomic((fs::path(dir) / "campbell.csv").string(), fmt::to_string(b));
   std::string json = verdicts_json(v);
   json.insert(json.size() - 3, fmt::format(",\n  \"spectrogram\": \"{}\"",
                                            sg_note.empty() ? "written" : "skipped: " + sg_note));
-  write_atomic((fs::path(dir) / "analysis.json").string(), json);
+  write_file_atomic((fs::path(dir) / "analysis.json").string(), json);
   return v;
 }
 

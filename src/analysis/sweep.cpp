@@ -17,6 +17,7 @@
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/output_folder.hpp"
 #include "rubdyn/io/simulate.hpp"
+#include "rubdyn/io/text_files.hpp"
 
 namespace rubdyn {
 
@@ -47,18 +48,6 @@ double parse_double(const std::string& s, const std::string& what) {
 
 std::string opt_csv(const std::optional<double>& x) {
   return x ? fmt::format("{}", *x) : "";
-}
-
-void write_atomic(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp, std::ios::binary);
-    f << text;
-    if (!f) throw std::runtime_error("cannot write " + tmp);
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw std::runtime_error("cannot rename " + tmp + " to " + path + ": " + ec.message());
 }
 
 // Tighter solver settings for --certify, as case overrides.
@@ -291,15 +280,15 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
   for (const auto& v : o.vary) keys.push_back(v.key);
   const std::string table = sweep_csv(keys, rows, o.certify);
   if (o.shard.count == 1) {
-    write_atomic((fs::path(o.out) / "sweep.csv").string(), table);
+    write_file_atomic((fs::path(o.out) / "sweep.csv").string(), table);
   } else {
     const std::string stem = fmt::format("sweep-shard-{}-of-{}", o.shard.index, o.shard.count);
-    write_atomic(
+    write_file_atomic(
         (fs::path(o.out) / (stem + ".json")).string(),
         fmt::format("{{\"shard\": {}, \"shards\": {}, \"points_total\": {}, "
                     "\"certify\": {}}}\n",
                     o.shard.index, o.shard.count, all.size(), o.certify ? "true" : "false"));
-    write_atomic((fs::path(o.out) / (stem + ".csv")).string(), table);
+    write_file_atomic((fs::path(o.out) / (stem + ".csv")).string(), table);
   }
   return rows;
 }
@@ -366,7 +355,7 @@ long merge_sweep_shards(const std::string& out) {
                                          missing.size(), total, missing.front()));
   std::string text = header + "\n";
   for (const auto& [idx, line] : lines) text += line + "\n";
-  write_atomic((fs::path(out) / "sweep.csv").string(), text);
+  write_file_atomic((fs::path(out) / "sweep.csv").string(), text);
   return static_cast<long>(lines.size());
 }
 
