@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
 # Installs every dependency of rubdyn from Debian 12 packages. Idempotent: when everything is
 # present it does nothing (no apt-get update, no network). Run as root (or with sudo).
+#   scripts/install-deps.sh          what the build, the tests and the figures need
+#   scripts/install-deps.sh --peer   also python3-siconos (Siconos 4.4), the external peer of
+#                                    validation/siconos/ (not a dependency of rubdyn itself)
 set -euo pipefail
 
 # Build and test dependencies (libraries, compiler, build tools) and the figure/validation stack.
@@ -15,6 +18,10 @@ packages=(
   libbenchmark-dev     # Google Benchmark (bench/)
   python3-matplotlib python3-numpy python3-scipy   # figures and studies in validation/
 )
+
+if [ "${1:-}" = "--peer" ]; then
+  packages+=(python3-siconos)
+fi
 
 missing=()
 for p in "${packages[@]}"; do

@@ -85,6 +85,7 @@ const std::vector<KeySpec>& schema() {
     num("solver", "qn_tol", false, [](CaseSpec& c) { return &c.solver.qn_tol; });
     num("solver", "theta", false, [](CaseSpec& c) { return &c.solver.theta; });
     num("solver", "eta", false, [](CaseSpec& c) { return &c.solver.eta; });
+    text("solver", "projection", [](CaseSpec& c) { return &c.solver.projection; });
     num("output", "dt", false, [](CaseSpec& c) { return &c.output.dt; });
     integer("output", "every", [](CaseSpec& c) { return &c.output.every; });
     text("output", "folder", [](CaseSpec& c) { return &c.output.folder; });
@@ -351,6 +352,10 @@ class Loader {
     }
     if (so.method != "bdf" && so.method != "adams") {
       issue("solver.method", at("solver.method"), "\"" + so.method + "\"", "must be bdf or adams");
+    }
+    if (so.projection != "mass" && so.projection != "identity") {
+      issue("solver.projection", at("solver.projection"), "\"" + so.projection + "\"",
+            "must be mass or identity");
     }
     rule(so.rtol > 0, "solver.rtol", so.rtol, "must be > 0");
     rule(so.atol > 0, "solver.atol", so.atol, "must be > 0");

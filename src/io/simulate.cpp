@@ -33,6 +33,7 @@ RunSummary simulate(const CaseSpec& spec, OutputSink& sink, const ProgressFn& pr
   opt.qn_tol = spec.solver.qn_tol;
   opt.theta = spec.solver.theta;
   opt.eta = spec.solver.eta;
+  opt.project_with_mass = spec.solver.projection == "mass";
   opt.output_every = spec.output.every;
   opt.output_dt = spec.output.dt;
   opt.omega_lim = spec.run.omega_lim;

@@ -370,11 +370,14 @@ bool FixedStepRunner::carpenter_step(double t, bool qn) {
 // the contact problem being solved at every Newton iterate (so the converged pair (v, r) solves
 // the coupled problem). Contact is active (index set) when the predicted gap
 // d_N(q_i) + h/2 v_N(q_i, v_i) <= 0. W_N, W_T are taken at q_i (the relation is linearised at
-// the start of the step, as in Siconos' MoreauJeanOSI for a fixed index set). Newton's law at
+// the start of the step; Siconos' MoreauJeanOSI re-evaluates them at every Newton iterate, which
+// changes the scheme at O(h), see validation/siconos). Newton's law at
 // velocity level: u_N = v_N(i+1) + e_n v_N(i), u_T = v_t(i+1) + e_t v_t(i), with the 2D Coulomb
 // cone solved exactly (solve_local). Reported forces are impulse / h.
 // mj-proj (Acary 2013): after the step, if d_N(q_{i+1}) < 0 the positions are projected back
-// onto d_N = 0 along M^{-1} W_N (mass-weighted metric); velocities are not changed.
+// onto d_N = 0 along M^{-1} W_N (mass-weighted metric, default) or along W_N (Euclidean metric,
+// solver.projection = "identity", as Siconos' MLCPProjectOnConstraints); velocities are not
+// changed.
 // ---------------------------------------------------------------------------------------------
 bool FixedStepRunner::moreau_jean_step(double t, bool project) {
   const double h = h_, th = o_.theta, eta = o_.eta;
@@ -469,9 +472,12 @@ bool FixedStepRunner::moreau_jean_step(double t, bool project) {
     for (int k = 0; k < 3; ++k) {
       const ContactKinematics c = m_.contact(q, v);
       if (!c.normal_defined || c.d_N >= 0.0) break;
-      Mat7 Mq;
-      m_.mass_matrix(q, Mq);
-      const Vec7 x = Mq.ldlt().solve(c.W_N);
+      Vec7 x = c.W_N;
+      if (o_.project_with_mass) {
+        Mat7 Mq;
+        m_.mass_matrix(q, Mq);
+        x = Mq.ldlt().solve(c.W_N);
+      }
       q += x * (-c.d_N / c.W_N.dot(x));
     }
   }
@@ -493,10 +499,17 @@ RunSummary FixedStepRunner::run(const MechanicalState& init, double t_end) {
   const bool carpenter =
       o_.scheme == FixedStepScheme::CarpOneVC || o_.scheme == FixedStepScheme::CarpQN;
   sum_.solver = std::string(to_string(o_.scheme));
-  sum_.options = carpenter ? fmt::format("{{\"h\": {:.6g}, \"itmax\": {}, \"qn_tol\": {:.3g}}}",
-                                         o_.h, o_.itmax, o_.qn_tol)
-                           : fmt::format("{{\"h\": {:.6g}, \"theta\": {:.6g}, \"eta\": {:.6g}}}",
-                                         o_.h, o_.theta, o_.eta);
+  if (carpenter) {
+    sum_.options = fmt::format("{{\"h\": {:.6g}, \"itmax\": {}, \"qn_tol\": {:.3g}}}", o_.h,
+                               o_.itmax, o_.qn_tol);
+  } else if (o_.scheme == FixedStepScheme::MoreauJeanProjected) {
+    sum_.options =
+        fmt::format("{{\"h\": {:.6g}, \"theta\": {:.6g}, \"eta\": {:.6g}, \"projection\": \"{}\"}}",
+                    o_.h, o_.theta, o_.eta, o_.project_with_mass ? "mass" : "identity");
+  } else {
+    sum_.options = fmt::format("{{\"h\": {:.6g}, \"theta\": {:.6g}, \"eta\": {:.6g}}}", o_.h,
+                               o_.theta, o_.eta);
+  }
   sum_.t_start = init.t;
   sum_.t_end_requested = t_end;
   next_t_out_ = init.t;

@@ -220,6 +220,8 @@ TEST_CASE("Solver and output rules", "[io]") {
   CHECK(one_issue(solver("itmax = 2.5"), "solver.itmax", 31).find("integer") != std::string::npos);
   CHECK(one_issue(solver("theta = 0.3"), "solver.theta", 31).find("[0.5, 1]") != std::string::npos);
   CHECK(one_issue(solver("eta = 1.5"), "solver.eta", 31).find("[0, 1]") != std::string::npos);
+  CHECK(one_issue(solver("projection = \"euclid\""), "solver.projection", 31)
+            .find("mass or identity") != std::string::npos);
   CHECK(one_issue(solver("method = \"rk4\""), "solver.method", 31).find("bdf or adams") !=
         std::string::npos);
   const std::string out = std::string(kValid) + "[output]\ndt = 0.0\n";

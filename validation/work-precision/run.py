@@ -182,14 +182,19 @@ def goals(rows):
                          "met" if ratio > 1 else "NOT met"))
     sic = [r for r in rows if r["solver"] == "siconos-mj" and float(r["value"]) == 1e-7]
     for r in sic:
-        e = event_wall_for(rows, r["case"], "orbit_error", r["orbit_error"])
-        if e:
+        # the cheapest event-driven run at least as accurate on both measures
+        ok = [e for e in rows if e["case"] == r["case"] and e["solver"].startswith("event")
+              and e["termination"] == "completed" and e["orbit_error"] <= r["orbit_error"]
+              and e["omega_error"] <= r["omega_error"]]
+        if ok:
+            e = min(ok, key=lambda x: x["wall_median"])
             ratio = r["wall_median"] / e["wall_median"]
-            lines.append("(d) %s: Siconos MJ h = 1e-7 reaches orbit error %.2e m in %.3g s; the "
-                         "event-driven solver reaches it in %.3g s (%s rtol %s): %.0fx (goal: "
-                         ">= 1000x): %s" % (r["case"], r["orbit_error"], r["wall_median"],
-                                            e["wall_median"], e["solver"], e["value"], ratio,
-                                            "met" if ratio >= 1000 else "NOT met"))
+            lines.append("(d) %s: Siconos MJ h = 1e-7 reaches orbit error %.2e m and omega error "
+                         "%.2e rad/s in %.3g s; the event-driven solver is at least as accurate "
+                         "on both in %.3g s (%s rtol %s): %.0fx (goal: >= 1000x): %s" % (
+                             r["case"], r["orbit_error"], r["omega_error"], r["wall_median"],
+                             e["wall_median"], e["solver"], e["value"], ratio,
+                             "met" if ratio >= 1000 else "NOT met"))
     if not sic:
         lines.append("(d) no Siconos MJ run at h = 1e-7 in validation/siconos/results.csv")
     return lines

@@ -31,11 +31,12 @@ struct SolverOptions {
   std::string method = "bdf";          ///< bdf | adams (CVODE linear multistep family)
   double max_events_per_second = 1e6;  ///< chattering guard: events per simulated second
   // fixed-step
-  double h = 1e-6;        ///< time step [s]
-  int itmax = 20;         ///< carp-qn: max quasi-Newton iterations per step
-  double qn_tol = 1e-12;  ///< carp-qn: relative tolerance on the step increment
-  double theta = 0.5;     ///< Moreau-Jean theta (gamma in the paper), in [0.5, 1]
-  double eta = 0.5;       ///< Moreau-Jean mass-matrix weight, in [0, 1]
+  double h = 1e-6;                  ///< time step [s]
+  int itmax = 20;                   ///< carp-qn: max quasi-Newton iterations per step
+  double qn_tol = 1e-12;            ///< carp-qn: relative tolerance on the step increment
+  double theta = 0.5;               ///< Moreau-Jean theta (gamma in the paper), in [0.5, 1]
+  double eta = 0.5;                 ///< Moreau-Jean mass-matrix weight, in [0, 1]
+  std::string projection = "mass";  ///< mj-proj metric: mass | identity
 };
 
 /// [output]

@@ -25,7 +25,11 @@ struct FixedStepOptions {
   double qn_tol = 1e-12;  ///< carp-qn: relative tolerance on the step increment
   double theta = 0.5;     ///< Moreau-Jean theta (gamma in the paper)
   double eta = 0.5;       ///< Moreau-Jean weight of q in M(q_{i+eta})
-  int output_every = 0;   ///< write every N-th step (0: use output_dt)
+  /// mj-proj: metric of the position projection. true: the kinetic metric, positions move
+  /// along M(q)^-1 W_N (default); false: the Euclidean metric in q, along W_N (Siconos'
+  /// MLCPProjectOnConstraints without mass normalisation).
+  bool project_with_mass = true;
+  int output_every = 0;  ///< write every N-th step (0: use output_dt)
   double output_dt = 1e-4;
   double omega_lim = 0.0;  ///< for the summary: first time v[TH] >= omega_lim
 };
