@@ -128,7 +128,8 @@ Variation parse_variation(const std::string& text) {
       throw std::invalid_argument(
           fmt::format("--vary '{}': count {} must be an integer in [2, 100000]", text, colon[2]));
     const int m = static_cast<int>(n);
-    for (int i = 0; i < m; ++i) v.values.push_back(fmt::format("{}", a + (b - a) * i / (m - 1.0)));
+    for (int i = 0; i < m; ++i)
+      v.values.push_back(fmt::format("{:.15g}", a + (b - a) * i / (m - 1.0)));
     return v;
   }
   if (colon.size() != 1) throw std::invalid_argument(fmt::format("--vary '{}': {}", text, rule));

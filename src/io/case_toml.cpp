@@ -424,7 +424,7 @@ std::string to_toml(const CaseSpec& c) {
       out += fmt::format("\n[{}]\n", section);
     }
     switch (ks.kind) {
-      case Kind::Number: out += fmt::format("{} = {:.17g}\n", ks.key, *ks.num(copy)); break;
+      case Kind::Number: out += fmt::format("{} = {}\n", ks.key, *ks.num(copy)); break;
       case Kind::Integer: out += fmt::format("{} = {}\n", ks.key, *ks.integer(copy)); break;
       case Kind::String: {
         std::string v = *ks.text(copy), esc;

@@ -220,3 +220,51 @@ TEST_CASE("sweep: parallel - sharded and merged tables equal the serial table", 
   fs::remove_all(out1);
   fs::remove_all(out2);
 }
+
+TEST_CASE("sweep --certify: a verdict that changes with the step is not certified", "[sweep]") {
+  // carp-onevc at h = 1e-4 on the full reference case: at mu = 0.2 the coarse run crosses
+  // omega_lim = 2110 rad/s (omega_max about 2126 rad/s: not limited) while the run at h = 1e-5
+  // stays below it (about 2104 rad/s: limited); at mu = 0.1 both pass omega_lim with no
+  // backward whirl. The margins (16 and 6 rad/s on omega_lim) are physical
+  // discretisation errors, far above round-off, so the verdicts do not depend on the build.
+  const fs::path out = tmp("sweep-certify");
+  SweepOptions o;
+  o.case_path = kRef;
+  o.sets = {"solver.kind=\"carp-onevc\"", "solver.h=1e-4"};
+  o.vary = {parse_variation("contact.mu=0.1,0.2")};
+  o.out = out.string();
+  o.jobs = 2;
+  o.certify = true;
+  const auto rows = run_sweep(o);
+  REQUIRE(rows.size() == 2);
+  for (const auto& r : rows) {
+    REQUIRE(r.complete);
+    REQUIRE(r.certified_run);
+    CHECK(r.tight_termination == "completed");
+    // the certified flag is exactly the agreement of the two runs' verdicts
+    const bool same = r.v.limited == r.tight.limited &&
+                      r.v.backward_onset.has_value() == r.tight.backward_onset.has_value() &&
+                      r.v.whip_onset.has_value() == r.tight.whip_onset.has_value();
+    CHECK(r.certified == same);
+    // the tight run used a ten times smaller step
+    std::ifstream f(fs::path(r.folder + "-tight") / "case.resolved.toml");
+    std::stringstream ss;
+    ss << f.rdbuf();
+    CHECK(ss.str().find("\nh = 1e-05\n") != std::string::npos);
+  }
+  CHECK(rows[0].certified);
+  CHECK_FALSE(rows[0].v.limited);
+  CHECK_FALSE(rows[1].certified);
+  CHECK_FALSE(rows[1].v.limited);
+  CHECK(rows[1].tight.limited);
+  // the table says so
+  std::ifstream t(out / "sweep.csv");
+  std::string header, l0, l1;
+  std::getline(t, header);
+  std::getline(t, l0);
+  std::getline(t, l1);
+  CHECK(header.find(",certified,tight_termination,tight_limited,") != std::string::npos);
+  CHECK(l0.find(",yes,completed,no,") != std::string::npos);
+  CHECK(l1.find(",no,completed,yes,") != std::string::npos);
+  fs::remove_all(out);
+}

@@ -26,7 +26,8 @@ struct Variation {
   std::string key;                  ///< section.key of the case file
   std::vector<std::string> values;  ///< as TOML values (validated by the case loader)
 };
-/// "section.key=v1,v2,..." or "section.key=a:b:n" (n >= 2 evenly spaced values from a to b).
+/// "section.key=v1,v2,..." or "section.key=a:b:n" (n >= 2 evenly spaced values from a to b,
+/// written with 15 significant digits: 0.14:0.2:7 gives 0.15, not 0.15000000000000002).
 /// Throws std::invalid_argument naming the text and the rule it breaks.
 Variation parse_variation(const std::string& text);
 
