@@ -2,9 +2,11 @@
 it back, and naming the machine a table was measured on."""
 import csv
 import json
+import math
 import os
 import platform
 import subprocess
+import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CASE = os.path.join(ROOT, "cases", "reference.toml")
@@ -46,3 +48,22 @@ def write_csv(path, rows):
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
         w.writerows(rows)
+
+
+def script_args(name):
+    """The command line of the study scripts: `run.py [path/to/rubdyn] [--quick]`. Returns
+    (rubdyn, quick, out) with out = ROOT/out/<name>."""
+    args = [a for a in sys.argv[1:] if not a.startswith("--")]
+    rubdyn = args[0] if args else os.path.join(ROOT, "build", "rubdyn")
+    return rubdyn, "--quick" in sys.argv, os.path.join(ROOT, "out", name)
+
+
+def grid_errors(grid, ref):
+    """(orbit error, omega error) of a grid {k: (x_r, y_r, omega)} against a reference grid: the
+    largest |r_r - r_r,ref| over the common sample times, and |omega - omega_ref| at the
+    reference's last sample (nan when the run does not reach it)."""
+    common = sorted(set(grid) & set(ref))
+    orbit = max(math.hypot(grid[k][0] - ref[k][0], grid[k][1] - ref[k][1]) for k in common)
+    kmax = max(ref)
+    omega = abs(grid[kmax][2] - ref[kmax][2]) if kmax in grid else float("nan")
+    return orbit, omega

@@ -21,12 +21,9 @@ import numpy as np  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
-from common import CASE, ROOT, machine  # noqa: E402
+from common import CASE, machine, script_args  # noqa: E402
 
-ARGS = [a for a in sys.argv[1:] if not a.startswith("--")]
-QUICK = "--quick" in sys.argv
-RUBDYN = ARGS[0] if ARGS else os.path.join(ROOT, "build", "rubdyn")
-OUT = os.path.join(ROOT, "out", "paper")
+RUBDYN, QUICK, OUT = script_args("paper")
 T_END = "0.1" if QUICK else "0.5"
 K_REF, M_REF, OMEGA_LIM, TAU = 2.0e6, 2.0, 2110.0, 20.0
 MUS = ["0", "0.1", "0.2", "0.22", "0.25"]

@@ -16,17 +16,14 @@ Usage: validation/siconos/run.py [path/to/rubdyn] [--quick]
   --quick  30 ms only, h = 1e-5 and 1e-6 (a smoke run; do not commit its output)
 Needs python3-siconos: scripts/install-deps.sh --peer
 """
-import csv
-import math
 import os
-import statistics
 import subprocess
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 sys.path.insert(0, HERE)
-from common import CASE, ROOT, machine, run_case, write_csv  # noqa: E402
+from common import CASE, grid_errors, machine, run_case, script_args, write_csv  # noqa: E402,E501
 
 try:
     import siconos.kernel  # noqa: F401
@@ -36,10 +33,7 @@ except ImportError:
     sys.exit(2)
 import model  # noqa: E402
 
-ARGS = [a for a in sys.argv[1:] if not a.startswith("--")]
-QUICK = "--quick" in sys.argv
-RUBDYN = ARGS[0] if ARGS else os.path.join(ROOT, "build", "rubdyn")
-OUT = os.path.join(ROOT, "out", "siconos")
+RUBDYN, QUICK, OUT = script_args("siconos")
 DT = 1e-4
 CASES = {"30ms": 0.03, "0.5s": 0.5}
 STEPS = {"30ms": [1e-5, 1e-6, 1e-7], "0.5s": [1e-5, 1e-6, 1e-7]}
@@ -54,12 +48,6 @@ def grid_of(rows):
     """rows of model.simulate -> {k: (x_r, y_r, omega)} on the 0.1 ms grid, as common.run_case."""
     return {round(t / DT): (q[model.XR], q[model.YR], v[model.TH]) for t, q, v, _, _ in rows}
 
-
-def errors(grid, ref):
-    common = sorted(set(grid) & set(ref))
-    orbit = max(math.hypot(grid[k][0] - ref[k][0], grid[k][1] - ref[k][1]) for k in common)
-    kmax = max(ref)
-    return orbit, abs(grid[kmax][2] - ref[kmax][2])
 
 
 def hstr(h):
@@ -82,8 +70,8 @@ def main():
             for solver, projected in (("siconos-mj", False), ("siconos-mj-proj", True)):
                 rows, wall, info = model.simulate(p, h, t_end, projected=projected, dt_out=DT)
                 g = grid_of(rows)
-                orbit, omega = errors(g, ref_g)
-                d_mj = errors(g, mj_g)
+                orbit, omega = grid_errors(g, ref_g)
+                d_mj = grid_errors(g, mj_g)
                 path = os.path.join(OUT, case, "%s-h%s.csv" % (solver, hstr(h)))
                 model.write_timeseries(path, rows, p)
                 results.append({
@@ -93,7 +81,7 @@ def main():
                     "newton_iterations": info["newton_iterations"],
                     "orbit_diff_rubdyn_mj": d_mj[0], "omega_diff_rubdyn_mj": d_mj[1],
                     "rubdyn_mj_wall_seconds": mj_s["wall_seconds"],
-                    "rubdyn_mj_orbit_error": errors(mj_g, ref_g)[0]})
+                    "rubdyn_mj_orbit_error": grid_errors(mj_g, ref_g)[0]})
                 print("%-5s %-16s h=%-6s orbit %.2e omega %.2e pen %.1e wall %.3f s "
                       "(rubdyn mj: %.3f s); vs rubdyn mj: orbit %.2e omega %.2e" % (
                           case, solver, hstr(h), orbit, omega, info["max_penetration"], wall,
@@ -108,9 +96,9 @@ def main():
                 scheme, hstr(h))), ["--t-end", "0.03", "--solver", scheme, "--h", repr(h)] + extra,
                 DT)
             rows, _, _ = model.simulate(p, h, t_end, projected=projected, dt_out=DT, frozen=True)
-            d = errors(grid_of(rows), g_r)
+            d = grid_errors(grid_of(rows), g_r)
             rows_stock, _, _ = model.simulate(p, h, t_end, projected=projected, dt_out=DT)
-            d_stock = errors(grid_of(rows_stock), g_r)
+            d_stock = grid_errors(grid_of(rows_stock), g_r)
             agreement.append({"scheme": scheme, "h": hstr(h), "t_end": t_end,
                               "orbit_diff_same_scheme": d[0], "omega_diff_same_scheme": d[1],
                               "orbit_diff_stock_siconos": d_stock[0],

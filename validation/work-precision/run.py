@@ -23,12 +23,9 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
-from common import ROOT, machine, run_case, write_csv  # noqa: E402
+from common import ROOT, grid_errors, machine, run_case, script_args, write_csv  # noqa: E402
 
-ARGS = [a for a in sys.argv[1:] if not a.startswith("--")]
-QUICK = "--quick" in sys.argv
-RUBDYN = ARGS[0] if ARGS else os.path.join(ROOT, "build", "rubdyn")
-OUT = os.path.join(ROOT, "out", "work-precision")
+RUBDYN, QUICK, OUT = script_args("work-precision")
 DT = 1e-4
 
 CASES = {"30ms": 0.03, "0.5s": 0.5}
@@ -59,14 +56,6 @@ def measure(name, args):
     return summary, grid, walls
 
 
-def errors(grid, ref):
-    common = sorted(set(grid) & set(ref))
-    orbit = max(((grid[k][0] - ref[k][0]) ** 2 + (grid[k][1] - ref[k][1]) ** 2) ** 0.5
-                for k in common)
-    kmax = max(ref)
-    omega = abs(grid[kmax][2] - ref[kmax][2]) if kmax in grid else float("nan")
-    return orbit, omega
-
 
 def event_args(rtol):
     return ["--rtol", rtol, "--atol", "%.0e" % (float(rtol) * 1e-2)]
@@ -80,7 +69,7 @@ def run_all():
                                    te + ["--rtol", "1e-13", "--atol", "1e-15"], DT)
         chk_s, chk_g, _ = run_case(RUBDYN, os.path.join(OUT, case, "check-rtol1e-12"),
                                    te + ["--rtol", "1e-12", "--atol", "1e-14"], DT)
-        refs[case] = (ref_s, errors(chk_g, ref_g), ref_g[max(ref_g)][2])
+        refs[case] = (ref_s, grid_errors(chk_g, ref_g), ref_g[max(ref_g)][2])
         jobs = [("event-bdf", "rtol", r, event_args(r)) for r in EVENT_RTOLS]
         jobs += [("event-adams", "rtol", r, event_args(r) + ["--method", "adams"])
                  for r in EVENT_RTOLS]
@@ -88,7 +77,7 @@ def run_all():
         for solver, pname, pval, args in jobs:
             name = os.path.join(case, "%s-%s%s" % (solver, pname, pval))
             s, g, walls = measure(name, te + args)
-            orbit, omega = errors(g, ref_g)
+            orbit, omega = grid_errors(g, ref_g)
             rows.append({
                 "case": case, "solver": solver, "parameter": pname, "value": pval,
                 "termination": s["termination"], "t_reached": s["t_reached"],
