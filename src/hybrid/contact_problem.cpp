@@ -4,22 +4,23 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace rubdyn {
 
 void compute_contact_operators(const LagrangianModel& m, double t, const Vec7& q, const Vec7& v,
                                ContactOperators& op) {
-  Mat7 M;
-  m.mass_matrix(q, M);
+  Mat7x3 B;
   Vec7 f;
   m.smooth_forces(t, q, v, f);
+  B.col(0) = f;
   op.c = m.contact(q, v);
-  op.ldlt.compute(M);
-  // three vector solves: Eigen's multi-column solve takes its dynamic-size blocked path, about
-  // twice the cost at 7 x 3
-  op.Minv_f = op.ldlt.solve(f);
-  op.Minv_WN = op.ldlt.solve(op.c.W_N);
-  op.Minv_WT = op.ldlt.solve(op.c.W_T);
+  B.col(1) = op.c.W_N;
+  B.col(2) = op.c.W_T;
+  m.solve_mass(q, B, 3);
+  op.Minv_f = B.col(0);
+  op.Minv_WN = B.col(1);
+  op.Minv_WT = B.col(2);
   op.A_NN = op.c.W_N.dot(op.Minv_WN);
   op.A_NT = op.c.W_N.dot(op.Minv_WT);
   op.A_TT = op.c.W_T.dot(op.Minv_WT);
@@ -29,10 +30,13 @@ void compute_contact_operators(const LagrangianModel& m, double t, const Vec7& q
 
 void update_contact_velocity(const LagrangianModel& m, double t, const Vec7& q, const Vec7& v,
                              ContactOperators& op) {
+  Mat7x3 B;
   Vec7 f;
   m.smooth_forces(t, q, v, f);
+  B.col(0) = f;
   op.c = m.contact(q, v);
-  op.Minv_f = op.ldlt.solve(f);
+  m.solve_mass(q, B, 1);
+  op.Minv_f = B.col(0);
   op.b_N = op.c.W_N.dot(op.Minv_f) + op.c.wdot_N;
   op.b_T = op.c.W_T.dot(op.Minv_f) + op.c.wdot_T;
 }
@@ -71,7 +75,8 @@ PhaseDynamics phase_dynamics(const ContactOperators& op, Phase phase, double mu)
   return d;
 }
 
-ModeDecision select_mode(const ContactOperators& op, double mu, double v_t_eps, double rel_tol) {
+ModeDecision select_mode(const ContactOperators& op, double mu, double v_t_eps, double rel_tol,
+                         std::optional<Phase> ending, double force_scale) {
   // Candidate consistency at acceleration level (d_N = 0 and v_N = 0 assumed):
   //   free:   b_N >= 0 (the gap does not close)
   //   slip s: well posed, F_N >= 0, and, when v_t = 0, sliding starts in direction s
@@ -85,8 +90,17 @@ ModeDecision select_mode(const ContactOperators& op, double mu, double v_t_eps, 
   //                    stick -> slip): the continuation is the mode the witness leads into,
   //                    free before slip before stick;
   //   none:            inconsistent (Painleve); phase Free with n_consistent = 0.
+  // `ending`: the phase whose witness just crossed zero (with a nonzero slope: the root finder
+  // sees only sign changes). It cannot continue, although at the event its margin is zero and
+  // thus "boundary": it is dropped from the candidates while another one is consistent.
+  // Keeping it would restart the same phase with its witness falling through zero again (a
+  // loop of events at one instant: stick -> stick at a lift-off whose cone margin and normal
+  // force vanish together; slip -> slip at a lift-off with a stiff stator).
+  // The band is relative to the accelerations at the event and to the phase's force scale: at
+  // a lift-off both F_N and b_N vanish, and a margin that is zero to the accuracy of the root
+  // location (relative to the forces the phase had) must count as zero.
   ModeDecision out;
-  const double acc_scale = std::abs(op.b_N) + std::abs(op.b_T);
+  const double acc_scale = std::abs(op.b_N) + std::abs(op.b_T) + force_scale * op.A_NN;
   const double tol_acc = rel_tol * acc_scale + 1e-300;
   const double tol_F = tol_acc / std::max(op.A_NN, 1e-300);
   enum Level { Violated = 0, Boundary = 1, Strict = 2 };
@@ -130,6 +144,14 @@ ModeDecision select_mode(const ContactOperators& op, double mu, double v_t_eps, 
                                         level(mu * ds.F_N - std::abs(ds.F_T), mu * tol_F))
                              : Violated;
     cands[n++] = {Phase::Stick, ds, lv};
+  }
+  if (ending) {
+    bool other = false;
+    for (int i = 0; i < n; ++i) other |= cands[i].phase != *ending && cands[i].lv != Violated;
+    if (other) {
+      for (int i = 0; i < n; ++i)
+        if (cands[i].phase == *ending) cands[i].lv = Violated;
+    }
   }
   int n_strict = 0, n_boundary = 0, first_strict = -1, first_boundary = -1;
   for (int i = 0; i < n; ++i) {

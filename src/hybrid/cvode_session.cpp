@@ -6,11 +6,14 @@
 #include <sundials/sundials_context.h>
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
+#include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace rubdyn::detail {
 
@@ -33,12 +36,16 @@ void check(int flag, const char* what) {
 }  // namespace
 
 struct CvodeSession::Impl {
-  int n = 0, nq = 0;
+  int n = 0;
   SUNContext ctx = nullptr;
-  N_Vector y = nullptr, atol = nullptr, q = nullptr, qatol = nullptr;
+  N_Vector y = nullptr;
   SUNMatrix A = nullptr;
   SUNLinearSolver LS = nullptr;
+  SUNNonlinearSolver NLS = nullptr;
   void* mem = nullptr;
+  std::vector<double> rtol, atol;  // per component (error weights)
+  std::vector<double> y0;          // the state of the last restart
+  double t0 = 0.0;
   CvodeCallbacks cb;
   CvodeStats acc;  // counters of previous restarts
   bool started = false;
@@ -63,9 +70,16 @@ struct CvodeSession::Impl {
     auto* self = static_cast<Impl*>(ud);
     return self->cb.proj(t, N_VGetArrayPointer(y), N_VGetArrayPointer(corr), self->cb.user);
   }
-  static int quad(realtype t, N_Vector y, N_Vector qd, void* ud) {
+  static int weights(N_Vector y, N_Vector ewt, void* ud) {
     auto* self = static_cast<Impl*>(ud);
-    return self->cb.quad(t, N_VGetArrayPointer(y), N_VGetArrayPointer(qd), self->cb.user);
+    const double* yy = N_VGetArrayPointer(y);
+    double* w = N_VGetArrayPointer(ewt);
+    for (int i = 0; i < self->n; ++i) {
+      const double tol = self->rtol[i] * std::abs(yy[i]) + self->atol[i];
+      if (!(tol > 0.0)) return -1;
+      w[i] = 1.0 / tol;
+    }
+    return 0;
   }
 
   /// Adds the counters of the current integration (since the last restart) to s.
@@ -76,8 +90,10 @@ struct CvodeSession::Impl {
     s.steps += v;
     CVodeGetNumRhsEvals(mem, &v);
     s.rhs_evals += v;
-    CVodeGetNumJacEvals(mem, &v);
-    s.jac_evals += v;
+    if (LS) {  // a fixed-point session has no linear solver (and no Jacobian)
+      CVodeGetNumJacEvals(mem, &v);
+      s.jac_evals += v;
+    }
     CVodeGetNumGEvals(mem, &v);
     s.root_evals += v;
     CVodeGetNumNonlinSolvIters(mem, &v);
@@ -92,64 +108,56 @@ struct CvodeSession::Impl {
   ~Impl() {
     if (mem) CVodeFree(&mem);
     if (LS) SUNLinSolFree(LS);
+    if (NLS) SUNNonlinSolFree(NLS);
     if (A) SUNMatDestroy(A);
     if (y) N_VDestroy(y);
-    if (atol) N_VDestroy(atol);
-    if (q) N_VDestroy(q);
-    if (qatol) N_VDestroy(qatol);
     if (ctx) SUNContext_Free(&ctx);
   }
 };
 
-CvodeSession::CvodeSession(int n, int nq, CvodeMethod method, double rtol, const double* atol,
-                           const double* qatol, const CvodeCallbacks& cb, long max_steps)
+CvodeSession::CvodeSession(const CvodeConfig& cfg, const CvodeCallbacks& cb)
     : impl_(std::make_unique<Impl>()) {
   auto& I = *impl_;
+  const int n = cfg.n;
   I.n = n;
-  I.nq = nq;
   I.cb = cb;
+  I.rtol.assign(cfg.rtol, cfg.rtol + n);
+  I.atol.assign(cfg.atol, cfg.atol + n);
   check(SUNContext_Create(nullptr, &I.ctx), "SUNContext_Create");
   I.y = N_VNew_Serial(n, I.ctx);
-  I.atol = N_VNew_Serial(n, I.ctx);
-  std::memcpy(N_VGetArrayPointer(I.atol), atol, sizeof(double) * n);
   N_VConst(0.0, I.y);
-  I.mem = CVodeCreate(method == CvodeMethod::BDF ? CV_BDF : CV_ADAMS, I.ctx);
+  I.mem = CVodeCreate(cfg.method == CvodeMethod::BDF ? CV_BDF : CV_ADAMS, I.ctx);
   if (!I.mem) throw std::runtime_error("CVODE: CVodeCreate failed");
   check(CVodeInit(I.mem, &Impl::rhs, 0.0, I.y), "CVodeInit");
   check(CVodeSetUserData(I.mem, &I), "CVodeSetUserData");
-  check(CVodeSVtolerances(I.mem, rtol, I.atol), "CVodeSVtolerances");
-  check(CVodeSetMaxNumSteps(I.mem, max_steps), "CVodeSetMaxNumSteps");
-  I.A = SUNDenseMatrix(n, n, I.ctx);
-  I.LS = SUNLinSol_Dense(I.y, I.A, I.ctx);
-  check(CVodeSetLinearSolver(I.mem, I.LS, I.A), "CVodeSetLinearSolver");
-  if (cb.jac) check(CVodeSetJacFn(I.mem, &Impl::jac), "CVodeSetJacFn");
+  check(CVodeWFtolerances(I.mem, &Impl::weights), "CVodeWFtolerances");
+  check(CVodeSetMaxNumSteps(I.mem, cfg.max_steps), "CVodeSetMaxNumSteps");
+  if (cfg.fixed_point && cfg.method == CvodeMethod::Adams) {
+    I.NLS = SUNNonlinSol_FixedPoint(I.y, 0, I.ctx);
+    if (!I.NLS) throw std::runtime_error("CVODE: SUNNonlinSol_FixedPoint failed");
+    check(CVodeSetNonlinearSolver(I.mem, I.NLS), "CVodeSetNonlinearSolver");
+  } else {
+    I.A = SUNDenseMatrix(n, n, I.ctx);
+    I.LS = SUNLinSol_Dense(I.y, I.A, I.ctx);
+    check(CVodeSetLinearSolver(I.mem, I.LS, I.A), "CVodeSetLinearSolver");
+    if (cb.jac) check(CVodeSetJacFn(I.mem, &Impl::jac), "CVodeSetJacFn");
+  }
   if (cb.proj) {
     check(CVodeSetProjFn(I.mem, &Impl::proj), "CVodeSetProjFn");
     check(CVodeSetProjErrEst(I.mem, SUNFALSE), "CVodeSetProjErrEst");
-  }
-  if (nq > 0) {
-    I.q = N_VNew_Serial(nq, I.ctx);
-    I.qatol = N_VNew_Serial(nq, I.ctx);
-    std::memcpy(N_VGetArrayPointer(I.qatol), qatol, sizeof(double) * nq);
-    N_VConst(0.0, I.q);
-    check(CVodeQuadInit(I.mem, &Impl::quad, I.q), "CVodeQuadInit");
-    check(CVodeQuadSVtolerances(I.mem, rtol, I.qatol), "CVodeQuadSVtolerances");
-    check(CVodeSetQuadErrCon(I.mem, SUNTRUE), "CVodeSetQuadErrCon");
   }
 }
 
 CvodeSession::~CvodeSession() = default;
 
-void CvodeSession::restart(double t0, const double* y0, const double* q0, int n_roots,
-                           const int* directions, bool projection, double h_init, double t_stop) {
+void CvodeSession::restart(double t0, const double* y0, int n_roots, const int* directions,
+                           bool projection, double h_init, double t_stop) {
   auto& I = *impl_;
   I.collect();
   std::memcpy(N_VGetArrayPointer(I.y), y0, sizeof(double) * I.n);
+  I.y0.assign(y0, y0 + I.n);
+  I.t0 = t0;
   check(CVodeReInit(I.mem, t0, I.y), "CVodeReInit");
-  if (I.nq > 0) {
-    std::memcpy(N_VGetArrayPointer(I.q), q0, sizeof(double) * I.nq);
-    check(CVodeQuadReInit(I.mem, I.q), "CVodeQuadReInit");
-  }
   set_roots(n_roots, directions);
   if (I.cb.proj) check(CVodeSetProjFrequency(I.mem, projection ? 1 : 0), "CVodeSetProjFrequency");
   check(CVodeSetInitStep(I.mem, h_init), "CVodeSetInitStep");
@@ -201,29 +209,18 @@ CvodeSession::Status CvodeSession::advance(double tout, double& t, double* y, bo
 
 void CvodeSession::dky(double t, int k, double* out) const {
   auto& I = *impl_;
+  long nst = 0;
+  CVodeGetNumSteps(I.mem, &nst);
+  if (nst == 0 && k == 0 && t == I.t0) {
+    // no step since the restart: CVODE has no interpolant yet (an event at the very start of a
+    // phase, e.g. an impact in the initial state); the state is the restart state
+    std::memcpy(out, I.y0.data(), sizeof(double) * I.n);
+    return;
+  }
   N_Vector v = N_VMake_Serial(I.n, out, I.ctx);
   const int flag = CVodeGetDky(I.mem, t, k, v);
   N_VDestroy(v);
   check(flag, "CVodeGetDky");
-}
-
-void CvodeSession::quadratures(double* q) const {
-  auto& I = *impl_;
-  if (I.nq == 0) return;
-  realtype tq = 0.0;
-  N_Vector v = N_VMake_Serial(I.nq, q, I.ctx);
-  const int flag = CVodeGetQuad(I.mem, &tq, v);
-  N_VDestroy(v);
-  check(flag, "CVodeGetQuad");
-}
-
-void CvodeSession::quadratures_at(double t, double* q) const {
-  auto& I = *impl_;
-  if (I.nq == 0) return;
-  N_Vector v = N_VMake_Serial(I.nq, q, I.ctx);
-  const int flag = CVodeGetQuadDky(I.mem, t, 0, v);
-  N_VDestroy(v);
-  check(flag, "CVodeGetQuadDky");
 }
 
 void CvodeSession::root_info(int* info) const {

@@ -1,10 +1,10 @@
 #pragma once
-// CvodeSession: RAII over one CVODES integrator (SUNDIALS 6.4.1: CVODE plus quadratures) with dense
-// linear algebra, root finding, optional projection and quadratures. This file and
+// CvodeSession: RAII over one CVODES integrator (SUNDIALS 6.4.1) with dense linear algebra or
+// fixed-point iteration, root finding and optional projection. This file and
 // cvode_session.cpp are the ONLY ones that include SUNDIALS headers; SUNDIALS return flags become
 // exceptions or statuses here.
 //
-// The problem is given as plain callbacks on double arrays (y of size n, quadratures of size nq)
+// The problem is given as plain callbacks on double arrays (y of size n)
 // with a user pointer; a callback returns 0 on success, > 0 for a recoverable failure (CVODE
 // retries with a smaller step), < 0 for an unrecoverable one.
 #include <memory>
@@ -19,7 +19,6 @@ struct CvodeCallbacks {
   int (*roots)(double t, const double* y, double* g, void* user) = nullptr;
   /// Projection: fill corr so that y + corr satisfies the constraints (BDF only).
   int (*proj)(double t, const double* y, double* corr, void* user) = nullptr;
-  int (*quad)(double t, const double* y, double* qdot, void* user) = nullptr;
   void* user = nullptr;
 };
 
@@ -30,20 +29,31 @@ struct CvodeStats {
 
 enum class CvodeMethod { BDF, Adams };
 
+/// What a session integrates and how. Error weights are per component:
+/// ewt_i = 1 / (rtol_i |y_i| + atol_i).
+struct CvodeConfig {
+  int n = 0;
+  CvodeMethod method = CvodeMethod::BDF;
+  /// Adams only: fixed-point (functional) iteration instead of Newton. A non-stiff system then
+  /// needs no Jacobian and no linear solve.
+  bool fixed_point = false;
+  const double* rtol = nullptr;  ///< size n
+  const double* atol = nullptr;  ///< size n
+  long max_steps = 500;
+};
+
 class CvodeSession {
  public:
-  /// atol: per-component absolute tolerances (size n); qatol likewise (size nq).
-  CvodeSession(int n, int nq, CvodeMethod method, double rtol, const double* atol,
-               const double* qatol, const CvodeCallbacks& cb, long max_steps);
+  CvodeSession(const CvodeConfig& cfg, const CvodeCallbacks& cb);
   ~CvodeSession();
   CvodeSession(const CvodeSession&) = delete;
   CvodeSession& operator=(const CvodeSession&) = delete;
 
-  /// (Re)starts at t0 from y0 with quadratures q0, with n_roots witnesses (directions: -1
+  /// (Re)starts at t0 from y0, with n_roots witnesses (directions: -1
   /// decreasing only, +1 increasing only, 0 both), projection on or off, analytic Jacobian if
   /// the callbacks have one, and an initial step (0: CVODE's estimate). Counters accumulate.
-  void restart(double t0, const double* y0, const double* q0, int n_roots, const int* directions,
-               bool projection, double h_init, double t_stop);
+  void restart(double t0, const double* y0, int n_roots, const int* directions, bool projection,
+               double h_init, double t_stop);
   /// Changes the witnesses without restarting (same state, same history).
   void set_roots(int n_roots, const int* directions);
 
@@ -54,10 +64,6 @@ class CvodeSession {
   Status advance(double tout, double& t, double* y, bool one_step = false);
   /// k-th derivative of the interpolant at t (inside the last step).
   void dky(double t, int k, double* out) const;
-  /// Quadratures at the last returned time.
-  void quadratures(double* q) const;
-  /// Quadratures interpolated at t (inside the last step).
-  void quadratures_at(double t, double* q) const;
   /// Which witnesses fired: +1 / -1 (rising / falling), 0 (none). Size n_roots.
   void root_info(int* info) const;
   double last_step() const;

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 
 #include "cvode_session.hpp"
@@ -20,8 +21,14 @@ namespace rubdyn {
 
 namespace {
 
-constexpr int kN = 2 * kNumDofs;  // state y = (q, v)
-constexpr int kNq = 3;            // quadratures: work of applied loads, dampers, friction
+constexpr int kN = 2 * kNumDofs;  // full state y = (q, v)
+// The works of the applied loads, the dampers and friction are integrated with the state, as
+// its last kNw components (error-controlled like the rest). Carried in the state they ride on
+// the integrator's vector operations; as CVODES quadratures they cost a second Nordsieck array
+// (measured: 30 % of the run time in the rolling regime).
+constexpr int kNw = 3;
+constexpr int kNy = kN + kNw;  // largest session state
+using SessionState = std::array<double, kNy>;
 
 // Witness identifiers (what fired), in the order they are built for each phase.
 enum class Witness { Gap, GapRate, NormalForce, SlipSpeed, ConeUpper, ConeLower, Omega };
@@ -56,6 +63,7 @@ class Integrator {
     graze_band_ = std::max(graze_tol_, 1e-6 * g0_);
     v_ref_ = std::max(1e3 * g0_, 1e-300);
     omega_pending_ = opt.omega_lim > 0.0;
+    if (opt.contact_phases == ContactFormulation::Reduced) chart_ = m.contact_chart();
   }
 
   RunSummary run(const MechanicalState& init, double t_end);
@@ -75,9 +83,6 @@ class Integrator {
   static int proj(double t, const double* y, double* corr, void* u) {
     return static_cast<Integrator*>(u)->eval_proj(t, y, corr);
   }
-  static int quad(double t, const double* y, double* qd, void* u) {
-    return static_cast<Integrator*>(u)->eval_quad(t, y, qd);
-  }
 
   static void split(const double* y, Vec7& q, Vec7& v) {
     q = Eigen::Map<const Vec7>(y);
@@ -86,31 +91,56 @@ class Integrator {
 
   int eval_rhs(double t, const double* y, double* yd) {
     Vec7 q, v;
+    if (reduced_phase()) {
+      // Minimal coordinates: the constrained acceleration of the full model at the embedded
+      // state, reduced to p'' (contact_chart.hpp); the constraints hold by construction.
+      Vec7 p, pd, pdd;
+      unpack(y, p, pd);
+      chart_->embed(mode_, anchor_, p, pd, q, v);
+      ContactOperators op;
+      compute_contact_operators(m_, t, q, v, op);
+      const PhaseDynamics d = phase_dynamics(op, phase_, law_.mu);
+      if (!d.well_posed) return 1;  // recoverable: CVODE retries with a smaller step
+      chart_->reduce(mode_, anchor_, p, pd, q, d.a, pdd);
+      for (int i = 0; i < dim_; ++i) {
+        yd[i] = pd[i];
+        yd[dim_ + i] = pdd[i];
+      }
+      powers(t, q, v, d.F_T * op.c.v_t, yd + n_);
+      return pdd.allFinite() ? 0 : 1;
+    }
     split(y, q, v);
     Vec7 a;
+    double friction_power = 0.0;
     if (phase_ == Phase::Free) {
       // Free flight needs only M and f: no contact quantities are built here.
-      Mat7 M;
+      Mat7x3 B;
       Vec7 f;
-      m_.mass_matrix(q, M);
       m_.smooth_forces(t, q, v, f);
-      a = M.ldlt().solve(f);
+      B.col(0) = f;
+      m_.solve_mass(q, B, 1);
+      a = B.col(0);
     } else {
       ContactOperators op;
       compute_contact_operators(m_, t, q, v, op);
       const PhaseDynamics d = phase_dynamics(op, phase_, law_.mu);
       if (!d.well_posed) return 1;  // recoverable: CVODE retries with a smaller step
       a = d.a;
-      // CVODES evaluates the quadrature integrand at the same (t, y) right after: keep the
-      // friction power so that eval_quad does not factor M again
-      cache_t_ = t;
-      cache_y_ = Eigen::Map<const Vec14>(y);
-      cache_friction_power_ = d.F_T * op.c.v_t;
+      friction_power = d.F_T * op.c.v_t;
     }
     Eigen::Map<Vec7> yd_q(yd), yd_v(yd + kNumDofs);
     yd_q = v;
     yd_v = a;
+    powers(t, q, v, friction_power, yd + kN);
     return a.allFinite() ? 0 : 1;
+  }
+
+  /// Rates of the works carried in the state: applied loads, dampers, friction.
+  void powers(double t, const Vec7& q, const Vec7& v, double friction, double* w) const {
+    const SmoothPower p = m_.smooth_power(t, q, v);
+    w[0] = p.external;
+    w[1] = p.damping;
+    w[2] = friction;
   }
 
   // Analytic Jacobian of free flight: d/dq (M^{-1} f) = M^{-1} (df/dq - d(M a)/dq), with a fixed.
@@ -127,12 +157,54 @@ class Integrator {
     m_.mass_matrix_product_jacobian(q, a, dMa);
     const Mat7 daq = ldlt.solve(dfdq - dMa);
     const Mat7 dav = ldlt.solve(dfdv);
-    Eigen::Map<Mat14> Jm(J);  // column-major, as SUNDIALS' dense matrix
+    // column-major kNy x kNy, as SUNDIALS' dense matrix; the rows of the works are left 0 (they
+    // feed back into nothing, so Newton converges on them with the state)
+    Eigen::Map<Eigen::Matrix<double, kNy, kNy>> Jm(J);
     Jm.setZero();
     Jm.topRightCorner<kNumDofs, kNumDofs>().setIdentity();
     Jm.bottomLeftCorner<kNumDofs, kNumDofs>() = daq;
     Jm.bottomRightCorner<kNumDofs, kNumDofs>() = dav;
     return 0;
+  }
+
+  // ---- formulations ----
+  /// True while a contact phase is integrated in the chart's minimal coordinates.
+  bool reduced_phase() const { return chart_ != nullptr && phase_ != Phase::Free; }
+  /// Reduced coordinates p and rates p' of a session state (first dim_ entries).
+  void unpack(const double* y, Vec7& p, Vec7& pd) const {
+    p.setZero();
+    pd.setZero();
+    for (int i = 0; i < dim_; ++i) {
+      p[i] = y[i];
+      pd[i] = y[dim_ + i];
+    }
+  }
+  /// The full state of a session state of the current phase.
+  void to_full(const double* y, Vec7& q, Vec7& v) const {
+    if (!reduced_phase()) {
+      split(y, q, v);
+      return;
+    }
+    Vec7 p, pd;
+    unpack(y, p, pd);
+    chart_->embed(mode_, anchor_, p, pd, q, v);
+  }
+  /// The full state interpolated at t inside the last step of the current session.
+  void interp(double t, Vec14& y) const {
+    SessionState ys{};
+    cur_->dky(t, 0, ys.data());
+    Vec7 q, v;
+    to_full(ys.data(), q, v);
+    y << q, v;
+  }
+  /// Contact operators of a contact phase at (q, v): the DAE formulation first projects the
+  /// state onto the constraints (its interpolant between step ends is not projected); the
+  /// reduced one is on them by construction.
+  void contact_point(double t, Vec7& q, Vec7& v, ContactOperators& op) const {
+    if (chart_ != nullptr)
+      compute_contact_operators(m_, t, q, v, op);
+    else
+      project_state(t, q, v, op);
   }
 
   /// Projects a state of a contact phase onto the constraints (positions onto d_N = 0,
@@ -147,13 +219,12 @@ class Integrator {
 
   int eval_roots(double t, const double* y, double* g) {
     Vec7 q, v;
-    split(y, q, v);
-    // Witnesses of a contact phase are functions on the constraint manifold: evaluate them at
-    // the projected state (the interpolant between step ends is not projected).
+    to_full(y, q, v);
+    // Witnesses of a contact phase are functions on the constraint manifold.
     ContactOperators op;
     PhaseDynamics dyn;
     if (phase_ != Phase::Free) {
-      project_state(t, q, v, op);
+      contact_point(t, q, v, op);
       dyn = phase_dynamics(op, phase_, law_.mu);
     }
     int k = 0;
@@ -191,27 +262,8 @@ class Integrator {
     Eigen::Map<Vec7> corr_q(corr), corr_v(corr + kNumDofs);
     corr_q = q - q0;
     corr_v = v - v0;
+    std::fill(corr + kN, corr + kNy, 0.0);
     return q.allFinite() && v.allFinite() ? 0 : -1;
-  }
-
-  int eval_quad(double t, const double* y, double* qd) {
-    Vec7 q, v;
-    split(y, q, v);
-    const SmoothPower p = m_.smooth_power(t, q, v);
-    qd[0] = p.external;
-    qd[1] = p.damping;
-    qd[2] = 0.0;
-    if (phase_ == Phase::SlipPos || phase_ == Phase::SlipNeg) {
-      if (t == cache_t_ && Eigen::Map<const Vec14>(y) == cache_y_) {
-        qd[2] = cache_friction_power_;
-      } else {
-        ContactOperators op;
-        compute_contact_operators(m_, t, q, v, op);
-        const PhaseDynamics d = phase_dynamics(op, phase_, law_.mu);
-        qd[2] = d.F_T * op.c.v_t;
-      }
-    }
-    return 0;
   }
 
   // ---- helpers ----
@@ -222,7 +274,8 @@ class Integrator {
     FN = FT = 0.0;
     if (phase_ == Phase::Free) return;
     ContactOperators op;
-    compute_contact_operators(m_, t, q, v, op);
+    Vec7 qc = q, vc = v;
+    contact_point(t, qc, vc, op);
     const PhaseDynamics d = phase_dynamics(op, phase_, law_.mu);
     FN = d.F_N;
     FT = d.F_T;
@@ -232,11 +285,12 @@ class Integrator {
     Sample s;
     s.t = t;
     state_from(y, s.q, s.v);
-    // Dense output inside a contact phase is CVODE's interpolant, which is not projected:
-    // project it like a step end, so that every output state satisfies the constraints.
+    // Dense output inside a contact phase of the DAE formulation is CVODE's interpolant, which
+    // is not projected: project it like a step end, so that every output state satisfies the
+    // constraints (contact_point).
     if (phase_ != Phase::Free) {
       ContactOperators op;
-      project_state(t, s.q, s.v, op);
+      contact_point(t, s.q, s.v, op);
       const PhaseDynamics d = phase_dynamics(op, phase_, law_.mu);
       s.F_N = d.F_N;
       s.F_T = d.F_T;
@@ -281,22 +335,48 @@ class Integrator {
   }
 
   /// Starts (or restarts) integration of the current phase at (t, y).
+  /// In minimal coordinates the state is mapped into the chart of the phase (and the restart
+  /// state is its embedding, equal to y to round-off).
   void start_phase(double t, const Vec14& y) {
     phase_start_ = t;
     t_restart_ = t;
     y_restart_ = y;
     build_witnesses();
-    if (phase_ != Phase::Free) {
-      Vec7 q, v;
+    SessionState& ys = ys_;
+    std::copy(y.data(), y.data() + kN, ys.begin());
+    detail::CvodeSession* s = phase_ == Phase::Free ? free_.get() : contact_.get();
+    n_ = kN;
+    if (reduced_phase()) {
+      mode_ = phase_ == Phase::Stick ? ChartMode::Stick : ChartMode::Slip;
+      dim_ = chart_->dim(mode_);
+      n_ = 2 * dim_;
+      Vec7 q, v, p, pd;
       state_from(y, q, v);
+      chart_->chart(mode_, q, v, anchor_, p, pd);
+      for (int i = 0; i < dim_; ++i) {
+        ys[i] = p[i];
+        ys[dim_ + i] = pd[i];
+      }
+      chart_->embed(mode_, anchor_, p, pd, q, v);
+      y_restart_ << q, v;
+      s = mode_ == ChartMode::Stick ? stick_.get() : slip_.get();
+    }
+    std::copy(work_.begin(), work_.end(), ys.begin() + n_);
+    // F_ref_: the scale of the contact forces since the contact closed (witness scaling and
+    // the decision band at contact witnesses); a phase that starts with a vanishing force,
+    // e.g. slip at the instant stick ends with F_N -> 0, keeps the scale of the contact.
+    if (phase_ == Phase::Free) {
+      F_ref_ = 0.0;
+    } else {
+      Vec7 q, v;
+      state_from(y_restart_, q, v);
       double FN = 0, FT = 0;
       forces(t, q, v, FN, FT);
-      F_ref_ = std::max(std::abs(FN), 1e-6);
+      F_ref_ = std::max({F_ref_, std::abs(FN), 1e-6});
     }
-    detail::CvodeSession& s = phase_ == Phase::Free ? *free_ : *contact_;
-    cur_ = &s;
-    s.restart(t, y.data(), work_.data(), static_cast<int>(witnesses_.size()), dirs_.data(),
-              phase_ != Phase::Free, 0.0, t_end_);
+    cur_ = s;
+    s->restart(t, ys.data(), static_cast<int>(witnesses_.size()), dirs_.data(),
+               phase_ != Phase::Free && !reduced_phase(), 0.0, t_end_);
   }
 
   /// Puts q on d_N = 0 by a step along W_N (Euclidean metric): q <- q - W_N d_N / |W_N|^2.
@@ -311,10 +391,29 @@ class Integrator {
     }
   }
 
+  /// Writes the output times before t, interpolated in the last step, before an event at t
+  /// restarts the integration there: the step that found a root may have passed output times
+  /// before it, and polishing may move the event past an output time after the root; either
+  /// would leave an output time behind the restarted integrator.
+  void emit_outputs_before(double t) {
+    while (next_out_ < t && next_out_ < t_end_) {
+      Vec14 yo;
+      interp(next_out_, yo);
+      emit_sample(next_out_, yo);
+      next_out_ = t_init_ + static_cast<double>(++k_out_) * opt_.output_dt;
+    }
+  }
+
   void end_phase(double t) { sum_.phase_time[static_cast<int>(phase_)] += t - phase_start_; }
 
   /// Quadratures (works) at t inside the last step of the current session.
-  void works_at(double t) { cur_->quadratures_at(t, work_.data()); }
+  void works_at(double t) {
+    SessionState ys{};
+    cur_->dky(t, 0, ys.data());
+    std::copy(ys.begin() + n_, ys.begin() + n_ + kNw, work_.begin());
+  }
+  /// Works at the session's last returned state.
+  void works_now() { std::copy(ys_.begin() + n_, ys_.begin() + n_ + kNw, work_.begin()); }
 
   void fail(Termination why, const std::string& msg) {
     sum_.termination = why;
@@ -341,7 +440,7 @@ class Integrator {
   /// its value at the located time (with a huge tangential acceleration the time resolution of
   /// the root leaves |v_t| above the velocity tolerance).
   bool switch_on_constraint(double t, Vec14 y, EventRecord e, double rel_tol,
-                            bool at_slip_zero = false);
+                            bool at_slip_zero = false, std::optional<Phase> ending = std::nullopt);
   bool on_contact_witness(double t_root, const Vec14& y_root, Witness w);
   /// Value of a contact-phase witness (unscaled) at an interpolated state.
   double witness_value(Witness w, double t, const Vec14& y) const;
@@ -353,8 +452,10 @@ class Integrator {
   RunMonitor mon_;
   RunSummary sum_;
   double g0_ = 1, atol_q_ = 0, atol_v_ = 0, v_tol_ = 0, graze_tol_ = 0, graze_band_ = 0, v_ref_ = 1,
-         F_ref_ = 1;
+         F_ref_ = 0;
   double t_end_ = 0, phase_start_ = 0, t_restart_ = 0;
+  double t_init_ = 0, next_out_ = 0;  // output grid t_init_ + k output_dt, next time to write
+  long k_out_ = 1;
   Vec14 y_restart_ = Vec14::Zero();
   bool omega_pending_ = false;
   bool gap_rate_deferred_ = false;
@@ -362,15 +463,19 @@ class Integrator {
   int recoveries_ = 0;
   double t_last_root_ = 0.0;
   Vec14 y_last_root_ = Vec14::Zero();
-  std::array<double, kNq> work_last_root_{};
-  double cache_t_ = std::numeric_limits<double>::quiet_NaN(), cache_friction_power_ = 0.0;
-  Vec14 cache_y_ = Vec14::Zero();
+  std::array<double, kNw> work_last_root_{};
+  SessionState ys_{};  // the session's state (minimal coordinates in reduced phases, works)
+  // minimal coordinates (null chart_: contact phases as the DAE with projection)
+  const ContactChart* chart_ = nullptr;
+  ChartMode mode_ = ChartMode::Slip;
+  int dim_ = kNumDofs, n_ = kN;  // reduced dimension, size of the mechanical session state
+  Vec7 anchor_ = Vec7::Zero();
   Phase phase_ = Phase::Free;
   std::vector<Witness> witnesses_;
   std::vector<int> dirs_;
-  std::array<double, kNq> work_{};
+  std::array<double, kNw> work_{};
   double work_impacts_ = 0.0;
-  std::unique_ptr<detail::CvodeSession> free_, contact_;
+  std::unique_ptr<detail::CvodeSession> free_, contact_, slip_, stick_;
   detail::CvodeSession* cur_ = nullptr;
   std::array<double, 64> event_times_{};
   long n_events_ = 0;
@@ -391,8 +496,9 @@ bool Integrator::on_gap_closing(double t, Vec14 y, bool missed_crossing) {
     const double tn = std::clamp(t - c.d_N / c.v_N, t_lo, t_hi);
     if (tn == t) break;
     t = tn;
-    cur_->dky(t, 0, y.data());
+    interp(t, y);
   }
+  emit_outputs_before(t);
   works_at(t);
   end_phase(t);
   state_from(y, q, v);
@@ -473,7 +579,7 @@ bool Integrator::on_gap_closing(double t, Vec14 y, bool missed_crossing) {
 /// On the constraint (d_N = 0): make v_N exactly 0, let the contact problem decide the phase,
 /// log the event and restart.
 bool Integrator::switch_on_constraint(double t, Vec14 y, EventRecord e, double rel_tol,
-                                      bool at_slip_zero) {
+                                      bool at_slip_zero, std::optional<Phase> ending) {
   Vec7 q, v;
   state_from(y, q, v);
   project_position(q, v);
@@ -485,7 +591,7 @@ bool Integrator::switch_on_constraint(double t, Vec14 y, EventRecord e, double r
   project_velocity(op, near_stick ? 2 : 1, v);
   work_impacts_ += m_.kinetic_energy(q, v) - T_before;  // the (tiny) projection is an impulse
   compute_contact_operators(m_, t, q, v, op);
-  const ModeDecision d = select_mode(op, law_.mu, v_tol_, rel_tol);
+  const ModeDecision d = select_mode(op, law_.mu, v_tol_, rel_tol, ending, ending ? F_ref_ : 0.0);
   y.tail<kNumDofs>() = v;
   e.v_N_plus = op.c.v_N;
   e.v_t_plus = op.c.v_t;
@@ -515,7 +621,7 @@ double Integrator::witness_value(Witness w, double t, const Vec14& y) const {
   Vec7 q, v;
   state_from(y, q, v);
   ContactOperators op;
-  project_state(t, q, v, op);
+  contact_point(t, q, v, op);
   const PhaseDynamics d = phase_dynamics(op, phase_, law_.mu);
   switch (w) {
     case Witness::NormalForce: return d.F_N;
@@ -536,17 +642,17 @@ bool Integrator::on_contact_witness(double t_root, const Vec14& y_root, Witness 
   {
     double lo = cur_->current_time() - cur_->last_step(), hi = t_root;
     Vec14 yl;
-    cur_->dky(lo, 0, yl.data());
+    interp(lo, yl);
     const double g_lo = witness_value(w, lo, yl);
     if (g_lo != 0.0 && g_lo * witness_value(w, hi, y_root) <= 0.0) {
       for (int it = 0; it < 200 && hi - lo > 4e-16 * std::max(1.0, std::abs(hi)); ++it) {
         const double mid = 0.5 * (lo + hi);
         Vec14 ym;
-        cur_->dky(mid, 0, ym.data());
+        interp(mid, ym);
         (witness_value(w, mid, ym) * g_lo > 0.0 ? lo : hi) = mid;
       }
       t = lo;
-      cur_->dky(t, 0, y.data());
+      interp(t, y);
     }
   }
   works_at(t);
@@ -569,7 +675,8 @@ bool Integrator::on_contact_witness(double t_root, const Vec14& y_root, Witness 
   }
   // Decide with a band of 1e-7 relative: the witness is zero at the event to the accuracy of
   // the root location on the interpolant, so a margin of that size is a zero, not a sign.
-  return switch_on_constraint(t, y, e, 1e-7, w == Witness::SlipSpeed);
+  // The phase whose witness fired cannot continue (select_mode: `ending`).
+  return switch_on_constraint(t, y, e, 1e-7, w == Witness::SlipSpeed, phase_);
 }
 
 RunSummary Integrator::run(const MechanicalState& init, double t_end) {
@@ -578,27 +685,67 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
   sum_.solver = "event";
   sum_.options = fmt::format(
       "{{\"rtol\": {:.3g}, \"atol\": {:.3g}, \"free_flight\": \"{}\", \"contact_phases\": "
-      "\"bdf+projection\", \"output_dt\": {:.6g}}}",
-      opt_.rtol, opt_.atol, opt_.adams ? "adams" : "bdf", opt_.output_dt);
+      "\"{}\", \"nonlinear_solver\": \"{}\", \"output_dt\": {:.6g}}}",
+      opt_.rtol, opt_.atol, opt_.adams ? "adams" : "bdf",
+      chart_ ? (opt_.contact_adams ? "reduced+adams" : "reduced+bdf") : "bdf+projection",
+      opt_.fixed_point ? "fixed-point (adams)" : "newton", opt_.output_dt);
   sum_.t_start = init.t;
   sum_.t_end_requested = t_end;
 
-  // sessions
-  std::array<double, kN> atol{};
+  // sessions: free flight and the contact phases of the chosen formulation
+  // works: absolute tolerance 1e-9 J
+  SessionState rtol{}, atol{};
+  rtol.fill(opt_.rtol);
+  atol.fill(1e-9);
   for (int i = 0; i < kNumDofs; ++i) {
     atol[i] = atol_q_;
     atol[kNumDofs + i] = atol_v_;
   }
-  const std::array<double, kNq> qatol{1e-9, 1e-9, 1e-9};
-  detail::CvodeCallbacks cb_free{&rhs, &jac, &roots, nullptr, &quad, this};
-  detail::CvodeCallbacks cb_contact{&rhs, nullptr, &roots, &proj, &quad, this};
+  const detail::CvodeCallbacks cb_free{&rhs, &jac, &roots, nullptr, this};
+  const detail::CvodeCallbacks cb_contact{&rhs, nullptr, &roots, &proj, this};
+  const detail::CvodeCallbacks cb_reduced{&rhs, nullptr, &roots, nullptr, this};
+  auto config = [&](int n, detail::CvodeMethod method, const double* rt, const double* at) {
+    detail::CvodeConfig c;
+    c.n = n + kNw;
+    c.method = method;
+    c.fixed_point = opt_.fixed_point;
+    c.rtol = rt;
+    c.atol = at;
+    c.max_steps = opt_.max_steps_per_phase;
+    return c;
+  };
+  const auto method = [](bool adams) {
+    return adams ? detail::CvodeMethod::Adams : detail::CvodeMethod::BDF;
+  };
   try {
     free_ = std::make_unique<detail::CvodeSession>(
-        kN, kNq, opt_.adams ? detail::CvodeMethod::Adams : detail::CvodeMethod::BDF, opt_.rtol,
-        atol.data(), qatol.data(), cb_free, opt_.max_steps_per_phase);
-    contact_ = std::make_unique<detail::CvodeSession>(kN, kNq, detail::CvodeMethod::BDF, opt_.rtol,
-                                                      atol.data(), qatol.data(), cb_contact,
-                                                      opt_.max_steps_per_phase);
+        config(kN, method(opt_.adams), rtol.data(), atol.data()), cb_free);
+    if (chart_ == nullptr) {
+      contact_ = std::make_unique<detail::CvodeSession>(
+          config(kN, detail::CvodeMethod::BDF, rtol.data(), atol.data()), cb_contact);
+    } else {
+      // Tolerances in minimal coordinates: a coordinate that copies a full one keeps its
+      // weights; an angle that moves the contact point by L per radian is weighted by the
+      // displacement it causes, absolutely, at the gap's scale (contact_chart.hpp).
+      for (ChartMode mode : {ChartMode::Slip, ChartMode::Stick}) {
+        const int d = chart_->dim(mode);
+        const ChartScales sc = chart_->scales(mode);
+        SessionState rt{}, at{};
+        for (int i = 0; i < kNw; ++i) {
+          rt[2 * d + i] = opt_.rtol;
+          at[2 * d + i] = 1e-9;
+        }
+        for (int i = 0; i < d; ++i) {
+          const double L = sc.length[i];
+          rt[i] = L > 0.0 ? 0.0 : opt_.rtol;
+          at[i] = L > 0.0 ? (opt_.rtol * g0_ + atol_q_) / L : atol_q_;
+          rt[d + i] = opt_.rtol;
+          at[d + i] = atol_v_;
+        }
+        (mode == ChartMode::Slip ? slip_ : stick_) = std::make_unique<detail::CvodeSession>(
+            config(2 * d, method(opt_.contact_adams), rt.data(), at.data()), cb_reduced);
+      }
+    }
   } catch (const std::exception& ex) {
     fail(Termination::SolverFailure, ex.what());
     sink_.end(sum_);
@@ -614,6 +761,9 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
   bool ok = true;
 
   try {
+    t_init_ = init.t;
+    k_out_ = 1;
+    next_out_ = init.t + opt_.output_dt;
     // Initial phase: free unless the state is on the constraint.
     const ContactKinematics c0 = m_.contact(init.q, init.v);
     phase_ = Phase::Free;
@@ -624,7 +774,9 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
     } else if (c0.normal_defined && c0.d_N <= graze_tol_ && c0.v_N <= v_tol_) {
       // starts in contact: impact if closing, else the contact problem decides
       phase_start_ = t;
-      free_->restart(t, y.data(), work_.data(), 0, nullptr, false, 0.0, t_end_);
+      std::copy(y.data(), y.data() + kN, ys_.begin());
+      n_ = kN;
+      free_->restart(t, ys_.data(), 0, nullptr, false, 0.0, t_end_);
       cur_ = free_.get();
       if (c0.v_N < -v_tol_) {
         ok = on_gap_closing(t, y, false);
@@ -640,13 +792,16 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
       start_phase(t, y);
     }
 
-    long k_out = 1;
-    double next_out = init.t + opt_.output_dt;
     std::vector<int> info;
     while (ok && t < t_end_) {
-      const double tout = std::min(next_out, t_end_);
+      const double tout = std::min(next_out_, t_end_);
       const bool arming = gap_rate_deferred_;
-      const auto st = cur_->advance(tout, t, y.data(), arming);
+      const auto st = cur_->advance(tout, t, ys_.data(), arming);
+      {
+        Vec7 q, v;
+        to_full(ys_.data(), q, v);
+        y << q, v;
+      }
       if (st == detail::CvodeSession::Status::Failure && root_without_restart_ &&
           recoveries_ < 100) {
         // CVODE stops when a witness is zero both at the last root and just after it ("root
@@ -689,20 +844,15 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
       if (st == detail::CvodeSession::Status::Reached) {
         emit_sample(t, y);
         if (opt_.progress) opt_.progress(t, n_events_, y[kNumDofs + TH], phase_);
-        if (t >= tout && tout == next_out)
-          next_out = init.t + static_cast<double>(++k_out) * opt_.output_dt;
+        if (t >= tout && tout == next_out_)
+          next_out_ = t_init_ + static_cast<double>(++k_out_) * opt_.output_dt;
         continue;
       }
       // Root return. In single-step mode (arming the gap-rate witness) the step that found the
       // root may have passed output times before the root: write them first, interpolated on
       // that step (CVODE's interpolant covers [t_n - h_u, t_n], which holds them), or the
       // restart at the event would leave them behind the integrator.
-      while (next_out < t && next_out < t_end_) {
-        Vec14 yo;
-        cur_->dky(next_out, 0, yo.data());
-        emit_sample(next_out, yo);
-        next_out = init.t + static_cast<double>(++k_out) * opt_.output_dt;
-      }
+      emit_outputs_before(t);
       root_without_restart_ = false;
       info.assign(witnesses_.size(), 0);
       cur_->root_info(info.data());
@@ -776,12 +926,12 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
             Vec14 yl;
             for (int it = 0; it < 100 && hi - lo > 1e-15 * std::max(1.0, std::abs(t)); ++it) {
               const double mid = 0.5 * (lo + hi);
-              cur_->dky(mid, 0, yl.data());
+              interp(mid, yl);
               Vec7 ql, vl;
               state_from(yl, ql, vl);
               (m_.contact(ql, vl).d_N > 0.0 ? lo : hi) = mid;
             }
-            cur_->dky(hi, 0, yl.data());
+            interp(hi, yl);
             ok = on_gap_closing(hi, yl, true);
             restart_needed = true;
           }
@@ -807,7 +957,7 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
         root_without_restart_ = true;
         t_last_root_ = t;
         y_last_root_ = y;
-        cur_->quadratures(work_last_root_.data());
+        std::copy(ys_.begin() + n_, ys_.begin() + n_ + kNw, work_last_root_.begin());
       }
       if (restart_needed) {
         // the event handler restarted the integration at its (polished) event time
@@ -827,7 +977,7 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
   // Close the books.
   end_phase(t);
   sum_.t_reached = t;
-  if (cur_) cur_->quadratures(work_.data());
+  if (cur_) works_now();
   Vec7 q, v;
   state_from(y, q, v);
   sum_.energy_final = m_.kinetic_energy(q, v) + m_.potential_energy(q);
@@ -837,13 +987,15 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
   sum_.work_impacts = work_impacts_;
   sum_.close_energy_balance();
   mon_.fill(sum_);
-  const auto st = free_ ? free_->stats() : detail::CvodeStats{};
-  const auto sc = contact_ ? contact_->stats() : detail::CvodeStats{};
-  sum_.steps = st.steps + sc.steps;
-  sum_.rhs_evals = st.rhs_evals + sc.rhs_evals;
-  sum_.jac_evals = st.jac_evals + sc.jac_evals;
-  sum_.root_evals = st.root_evals + sc.root_evals;
-  sum_.newton_iters = st.newton_iters + sc.newton_iters;
+  for (const auto* s : {free_.get(), contact_.get(), slip_.get(), stick_.get()}) {
+    if (!s) continue;
+    const auto st = s->stats();
+    sum_.steps += st.steps;
+    sum_.rhs_evals += st.rhs_evals;
+    sum_.jac_evals += st.jac_evals;
+    sum_.root_evals += st.root_evals;
+    sum_.newton_iters += st.newton_iters;
+  }
   sum_.wall_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   sink_.end(sum_);

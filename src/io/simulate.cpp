@@ -18,6 +18,9 @@ RunSummary simulate(const CaseSpec& spec, OutputSink& sink, const ProgressFn& pr
     opt.rtol = spec.solver.rtol;
     opt.atol = spec.solver.atol;
     opt.adams = spec.solver.method == "adams";
+    opt.contact_phases = spec.solver.contact_phases == "projection" ? ContactFormulation::Projection
+                                                                    : ContactFormulation::Reduced;
+    opt.contact_adams = spec.solver.contact_method == "adams";
     opt.output_dt = spec.output.dt;
     opt.omega_lim = spec.run.omega_lim;
     opt.max_events_per_second = spec.solver.max_events_per_second;

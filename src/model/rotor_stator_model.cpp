@@ -4,7 +4,8 @@
 
 namespace rubdyn {
 
-RotorStatorModel::RotorStatorModel(const RotorStatorParams& p) : p_(p) {
+RotorStatorModel::RotorStatorModel(const RotorStatorParams& p)
+    : p_(p), chart_(p.stator.gap, p.rotor.radius) {
   const auto& r = p.rotor;
   l_ = r.L - r.delta;
   nu_ = r.d / l_;
@@ -44,6 +45,104 @@ RotorStatorModel::RotorStatorModel(const RotorStatorParams& p) : p_(p) {
   fext_[YB] = -(1.0 - nu_) * mg;
   fext_[YR] = -nu_ * mg;
   fext_[TH] = p.loads.torque;
+  detA_ = M11_ * M22_ - M12_ * M12_;
+  Minv_s_ = 1.0 / p.stator.mass;
+}
+
+void RotorStatorModel::solve_mass(const Vec7& q, Mat7x3& B, int ncols) const {
+  // Block elimination of theta (header): A^-1 = [[M22, -M12], [-M12, M11]] / det A on each of
+  // the pairs (x_b, x_r) and (y_b, y_r).
+  const double a11 = M22_ / detA_, a12 = -M12_ / detA_, a22 = M11_ / detA_;
+  const double Hx = 0.5 * H_ * (q[XR] - q[XB]), Hy = -0.5 * H_ * (q[YR] - q[YB]);
+  // u = A^-1 b with b = (H_y, H_x, -H_y, -H_x) on (x_b, y_b, x_r, y_r)
+  const double ub = a11 - a12, ur = a12 - a22;  // A^-1 (1, -1) on a pair
+  const double u_xb = Hy * ub, u_xr = Hy * ur, u_yb = Hx * ub, u_yr = Hx * ur;
+  const double schur = p_.rotor.Jp - (Hy * (u_xb - u_xr) + Hx * (u_yb - u_yr));
+  for (int j = 0; j < ncols; ++j) {
+    auto r = B.col(j);
+    const double zxb = a11 * r[XB] + a12 * r[XR], zxr = a12 * r[XB] + a22 * r[XR];
+    const double zyb = a11 * r[YB] + a12 * r[YR], zyr = a12 * r[YB] + a22 * r[YR];
+    const double th = (r[TH] - (Hy * (zxb - zxr) + Hx * (zyb - zyr))) / schur;
+    r[XB] = zxb - u_xb * th;
+    r[XR] = zxr - u_xr * th;
+    r[YB] = zyb - u_yb * th;
+    r[YR] = zyr - u_yr * th;
+    r[TH] = th;
+    r[XS] *= Minv_s_;
+    r[YS] *= Minv_s_;
+  }
+}
+
+void RotorStatorModel::Chart::chart(ChartMode mode, const Vec7& q, const Vec7& v, Vec7& anchor,
+                                    Vec7& p, Vec7& pd) const {
+  const double phi = std::atan2(q[YR] - q[YS], q[XR] - q[XS]);
+  anchor.setZero();
+  p.setZero();
+  pd.setZero();
+  if (mode == ChartMode::Slip) {
+    // phi' from the tangential component of the relative velocity (v_N = 0 on the manifold)
+    const double phid = (-std::sin(phi) * (v[XR] - v[XS]) + std::cos(phi) * (v[YR] - v[YS])) / g0_;
+    p << q[XB], q[YB], phi, q[TH], q[XS], q[YS], 0.0;
+    pd << v[XB], v[YB], phid, v[TH], v[XS], v[YS], 0.0;
+  } else {
+    anchor[0] = phi;
+    anchor[1] = q[TH];
+    p << q[XB], q[YB], 0.0, q[XS], q[YS], 0.0, 0.0;
+    pd << v[XB], v[YB], v[TH], v[XS], v[YS], 0.0, 0.0;
+  }
+}
+
+void RotorStatorModel::Chart::embed(ChartMode mode, const Vec7& anchor, const Vec7& p,
+                                    const Vec7& pd, Vec7& q, Vec7& v) const {
+  double phi, phid, xs, ys, vxs, vys;
+  if (mode == ChartMode::Slip) {
+    phi = p[2];
+    phid = pd[2];
+    q[TH] = p[3];
+    v[TH] = pd[3];
+    xs = p[4], ys = p[5], vxs = pd[4], vys = pd[5];
+  } else {
+    const double k = R_r_ / g0_;
+    phi = anchor[0] - k * p[2];
+    phid = -k * pd[2];
+    q[TH] = anchor[1] + p[2];
+    v[TH] = pd[2];
+    xs = p[3], ys = p[4], vxs = pd[3], vys = pd[4];
+  }
+  const double c = std::cos(phi), s = std::sin(phi);
+  q[XB] = p[0];
+  q[YB] = p[1];
+  q[XS] = xs;
+  q[YS] = ys;
+  q[XR] = xs + g0_ * c;
+  q[YR] = ys + g0_ * s;
+  v[XB] = pd[0];
+  v[YB] = pd[1];
+  v[XS] = vxs;
+  v[YS] = vys;
+  v[XR] = vxs - g0_ * phid * s;
+  v[YR] = vys + g0_ * phid * c;
+}
+
+void RotorStatorModel::Chart::reduce(ChartMode mode, const Vec7& /*anchor*/, const Vec7& p,
+                                     const Vec7& /*pd*/, const Vec7& q, const Vec7& a,
+                                     Vec7& pdd) const {
+  pdd.setZero();
+  if (mode == ChartMode::Slip) {
+    // t_phi . (a_r - a_s) / g0, with t_phi from the embedded q (no second sin/cos)
+    const double tx = -(q[YR] - q[YS]) / g0_, ty = (q[XR] - q[XS]) / g0_;
+    pdd << a[XB], a[YB], (tx * (a[XR] - a[XS]) + ty * (a[YR] - a[YS])) / g0_, a[TH], a[XS], a[YS],
+        0.0;
+    (void)p;
+  } else {
+    pdd << a[XB], a[YB], a[TH], a[XS], a[YS], 0.0, 0.0;
+  }
+}
+
+ChartScales RotorStatorModel::Chart::scales(ChartMode mode) const {
+  ChartScales sc;
+  sc.length[2] = mode == ChartMode::Slip ? g0_ : R_r_;
+  return sc;
 }
 
 void RotorStatorModel::mass_matrix(const Vec7& q, Mat7& M) const {

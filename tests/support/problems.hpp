@@ -9,8 +9,54 @@
 
 namespace rubdyn::testing {
 
+/// Minimal coordinates of the plane contact y = q[1] >= 0 with tangent q[0]: slip drops q[1]
+/// (p = q without dof 1), stick also fixes q[0] at its value where stick began (the anchor).
+class PlaneChart final : public ContactChart {
+ public:
+  int dim(ChartMode mode) const override { return mode == ChartMode::Slip ? 6 : 5; }
+  void chart(ChartMode mode, const Vec7& q, const Vec7& v, Vec7& anchor, Vec7& p,
+             Vec7& pd) const override {
+    anchor.setZero();
+    anchor[0] = q[0];
+    p.setZero();
+    pd.setZero();
+    for (int i = 0, k = 0; i < kNumDofs; ++i) {
+      if (!coordinate(mode, i)) continue;
+      p[k] = q[i];
+      pd[k++] = v[i];
+    }
+  }
+  void embed(ChartMode mode, const Vec7& anchor, const Vec7& p, const Vec7& pd, Vec7& q,
+             Vec7& v) const override {
+    q.setZero();
+    v.setZero();
+    if (mode == ChartMode::Stick) q[0] = anchor[0];
+    for (int i = 0, k = 0; i < kNumDofs; ++i) {
+      if (!coordinate(mode, i)) continue;
+      q[i] = p[k];
+      v[i] = pd[k++];
+    }
+  }
+  void reduce(ChartMode mode, const Vec7&, const Vec7&, const Vec7&, const Vec7&, const Vec7& a,
+              Vec7& pdd) const override {
+    pdd.setZero();
+    for (int i = 0, k = 0; i < kNumDofs; ++i) {
+      if (!coordinate(mode, i)) continue;
+      pdd[k++] = a[i];
+    }
+  }
+  ChartScales scales(ChartMode) const override { return {}; }
+
+ private:
+  /// Whether dof i is one of the reduced coordinates: never the normal dof 1; dof 0 only in slip.
+  static bool coordinate(ChartMode mode, int i) {
+    return i != 1 && (i != 0 || mode == ChartMode::Slip);
+  }
+};
+
 /// Base: identity mass, no contact forces; the contact is a plane on dof 1 (y >= 0) with the
-/// tangent along dof 0 unless a problem overrides contact().
+/// tangent along dof 0 unless a problem overrides contact() (and then contact_chart(), which
+/// describes that plane).
 class PaddedModel : public LagrangianModel {
  public:
   explicit PaddedModel(ContactLaw law, double gap_scale) : law_(law), gap_scale_(gap_scale) {}
@@ -32,8 +78,10 @@ class PaddedModel : public LagrangianModel {
   }
   double gap_scale() const override { return gap_scale_; }
   const ContactLaw& contact_law() const override { return law_; }
+  const ContactChart* contact_chart() const override { return &chart_; }
 
  protected:
+  PlaneChart chart_;
   double mass_ = 1.0;
   ContactLaw law_;
   double gap_scale_;

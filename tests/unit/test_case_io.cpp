@@ -187,6 +187,15 @@ TEST_CASE("An initial state that penetrates the stator is rejected", "[io]") {
   std::string t3 = kValid;
   t3.replace(t3.find("omega0 = 2000.0"), 15, "omega0 = 2000.0\ny_r = -2.0e-4");
   REQUIRE_NOTHROW(parse_case(t3, "case.toml"));
+  // a state written by a run on the constraint: d_N = -2.7e-20 m is round-off (1 ulp of g0), so
+  // it is touching, not penetrating
+  std::string t4 = kValid;
+  t4.replace(t4.find("omega0 = 2000.0"), 15, "omega0 = 2000.0\ny_r = -0.00020000000000000004");
+  REQUIRE_NOTHROW(parse_case(t4, "case.toml"));
+  // 1e-15 m is far beyond round-off of g0 (~3e-18 m): rejected
+  std::string t5 = kValid;
+  t5.replace(t5.find("omega0 = 2000.0"), 15, "omega0 = 2000.0\ny_r = -0.000200000000001");
+  CHECK(one_issue(t5, "initial.y_r", 27).find("penetrates") != std::string::npos);
 }
 
 TEST_CASE("Several errors in one file are all reported", "[io]") {

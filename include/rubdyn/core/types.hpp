@@ -16,6 +16,7 @@ using Vec2 = Eigen::Matrix<double, 2, 1>;
 using Vec7 = Eigen::Matrix<double, kNumDofs, 1>;
 using Mat2 = Eigen::Matrix<double, 2, 2>;
 using Mat7 = Eigen::Matrix<double, kNumDofs, kNumDofs>;
+using Mat7x3 = Eigen::Matrix<double, kNumDofs, 3>;
 using Vec14 = Eigen::Matrix<double, 2 * kNumDofs, 1>;
 using Mat14 = Eigen::Matrix<double, 2 * kNumDofs, 2 * kNumDofs>;
 

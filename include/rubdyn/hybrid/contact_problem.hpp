@@ -14,7 +14,7 @@
 // Impact map (v_N- < 0): Newton's law v_N+ = -e_n v_N- with a Coulomb frictional impulse:
 // first the sticking impulse (v_t+ = -e_t v_t-); if it leaves the cone, the sliding impulse
 // P_T = sigma mu P_N in the direction sigma the sticking impulse wanted. Exact for one contact.
-#include <Eigen/Cholesky>
+#include <optional>
 #include <string>
 
 #include "rubdyn/core/run_types.hpp"
@@ -23,9 +23,9 @@
 namespace rubdyn {
 
 /// M^{-1} applied to f, W_N and W_T, and the quantities every phase needs; computed once per
-/// evaluation (one LDLT of the 7x7 mass matrix, no allocation).
+/// evaluation (one solve with M(q) for three right-hand sides: the model's structured solve when
+/// it has one; no allocation).
 struct ContactOperators {
-  Eigen::LDLT<Mat7> ldlt;  ///< factorisation of M(q), reused when only v changes
   ContactKinematics c;
   Vec7 Minv_f, Minv_WN, Minv_WT;
   double A_NN = 0, A_NT = 0, A_TT = 0;  ///< Delassus matrix entries
@@ -34,7 +34,7 @@ struct ContactOperators {
 void compute_contact_operators(const LagrangianModel& m, double t, const Vec7& q, const Vec7& v,
                                ContactOperators& op);
 /// Updates the velocity-dependent parts (kinematic rates, M^{-1} f, b) for a new v at the same
-/// q, reusing the factorisation: no new LDLT.
+/// q: one solve with M(q) instead of three.
 void update_contact_velocity(const LagrangianModel& m, double t, const Vec7& q, const Vec7& v,
                              ContactOperators& op);
 
@@ -59,8 +59,12 @@ struct ModeDecision {
 /// |v_t| > v_t_eps; no stick and no slip direction when mu = 0) and keeps the consistent one;
 /// rel_tol is the relative band within which a margin counts as zero (the accuracy of the
 /// event location). The rules for ties and for no candidate are stated in the implementation.
+/// `ending`: the phase a witness has just ended, excluded while another mode is consistent.
+/// force_scale [N]: the contact forces of that phase (0: none); margins within rel_tol of it are
+/// zero.
 ModeDecision select_mode(const ContactOperators& op, double mu, double v_t_eps,
-                         double rel_tol = 1e-9);
+                         double rel_tol = 1e-9, std::optional<Phase> ending = std::nullopt,
+                         double force_scale = 0.0);
 
 struct ImpactResult {
   Vec7 v_plus = Vec7::Zero();

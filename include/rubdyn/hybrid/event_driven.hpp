@@ -35,10 +35,26 @@
 
 namespace rubdyn {
 
+/// How contact phases are integrated.
+enum class ContactFormulation {
+  /// Minimal coordinates of the model's ContactChart (slip: 6, stick: 5 coordinates): the
+  /// constraints hold by construction, no projection. Models without a chart fall back to the
+  /// projection formulation (the summary's options say which one ran).
+  Reduced,
+  /// The index-reduced DAE in the full coordinates, CVODE-BDF with projection after every step
+  /// (an in-house cross-check of the reduced formulation).
+  Projection
+};
+
 struct EventDrivenOptions {
   double rtol = 1e-10;
   double atol = 1e-12;  ///< absolute tolerance on positions [m]; velocities: atol * 1e3 [m/s]
-  bool adams = false;   ///< free flight with Adams-Moulton instead of BDF (contact phases: BDF)
+  bool adams = false;   ///< free flight with Adams-Moulton instead of BDF
+  ContactFormulation contact_phases = ContactFormulation::Reduced;
+  bool contact_adams = true;  ///< reduced contact phases with Adams (false: BDF)
+  /// Adams phases solve their implicit corrector by fixed-point iteration (no Jacobian, no
+  /// linear algebra) instead of Newton with a difference-quotient Jacobian.
+  bool fixed_point = true;
   double output_dt = 1e-4;
   double omega_lim = 0.0;  ///< crossing time reported (0: none)
   double max_events_per_second = 1e6;

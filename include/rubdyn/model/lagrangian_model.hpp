@@ -9,8 +9,10 @@
 // Energy audit: d(T + V)/dt = P_ext + P_damp + F_N v_N + F_T v_t, where T = 1/2 v^T M(q) v, V is
 // the potential of the conservative forces inside f, P_ext the power of the non-conservative
 // applied loads (driving torque) and P_damp <= 0 the power of the viscous dampers.
+#include <Eigen/Cholesky>
 #include <string_view>
 
+#include "rubdyn/contact/contact_chart.hpp"
 #include "rubdyn/contact/contact_kinematics.hpp"
 #include "rubdyn/contact/contact_law.hpp"
 #include "rubdyn/core/types.hpp"
@@ -31,6 +33,14 @@ class LagrangianModel {
 
   /// M(q), symmetric positive definite.
   virtual void mass_matrix(const Vec7& q, Mat7& M) const = 0;
+  /// Solves M(q) X = B in place for the first `ncols` columns of B (no allocation). The default
+  /// factors M (LDLT); a model with a structured mass matrix overrides it.
+  virtual void solve_mass(const Vec7& q, Mat7x3& B, int ncols) const {
+    Mat7 M;
+    mass_matrix(q, M);
+    const Eigen::LDLT<Mat7> ldlt(M);
+    for (int j = 0; j < ncols; ++j) B.col(j) = ldlt.solve(B.col(j));
+  }
   /// J = d(M(q) a)/dq for a fixed vector a (needed by implicit schemes and analytic Jacobians).
   virtual void mass_matrix_product_jacobian(const Vec7& q, const Vec7& a, Mat7& J) const = 0;
   /// Smooth forces f(t, q, v) (no contact).
@@ -54,6 +64,9 @@ class LagrangianModel {
   virtual double gap_scale() const = 0;
   /// The contact law.
   virtual const ContactLaw& contact_law() const = 0;
+  /// Minimal coordinates of the contact phases, or nullptr when the model has none (the
+  /// event-driven integrator then integrates contact phases as a DAE with projection).
+  virtual const ContactChart* contact_chart() const { return nullptr; }
 };
 
 }  // namespace rubdyn
