@@ -28,6 +28,13 @@ std::string brief_report(const RunSummary& s) {
     ph += fmt::format("{} {:.4g}%, ", to_string(static_cast<Phase>(k)),
                       span > 0 ? 100.0 * s.phase_time[k] / span : 0.0);
   line("phases        " + ph.substr(0, ph.size() - 2));
+  std::string cost;
+  for (int k = 0; k < kNumPhases; ++k)
+    if (s.phase_steps[k] > 0)
+      cost += fmt::format("{} {:.3g} us ({} steps), ", to_string(static_cast<Phase>(k)),
+                          1e6 * s.phase_wall[k] / static_cast<double>(s.phase_steps[k]),
+                          s.phase_steps[k]);
+  if (!cost.empty()) line("cost/step     " + cost.substr(0, cost.size() - 2));
   line(fmt::format("omega         max {:.10g} rad/s, final {:.10g} rad/s, omega_lim crossed {}",
                    s.omega_max, s.omega_final,
                    std::isnan(s.t_omega_lim) ? std::string("never")

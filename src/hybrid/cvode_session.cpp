@@ -239,6 +239,12 @@ double CvodeSession::current_time() const {
   return t;
 }
 
+long CvodeSession::steps_since_restart() const {
+  long nst = 0;
+  CVodeGetNumSteps(impl_->mem, &nst);
+  return nst;
+}
+
 CvodeStats CvodeSession::stats() const {
   CvodeStats s = impl_->acc;
   impl_->add_current(s);

@@ -68,7 +68,8 @@ class CvodeSession {
   void root_info(int* info) const;
   double last_step() const;
   double current_time() const;  ///< t_n, the end of the last internal step
-  CvodeStats stats() const;     ///< accumulated over all restarts
+  long steps_since_restart() const;
+  CvodeStats stats() const;  ///< accumulated over all restarts
   std::string last_error() const { return last_error_; }
 
  private:

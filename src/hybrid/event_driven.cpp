@@ -796,7 +796,14 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
     while (ok && t < t_end_) {
       const double tout = std::min(next_out_, t_end_);
       const bool arming = gap_rate_deferred_;
+      // per-phase cost: steps and wall time of the integration itself
+      const int ph = static_cast<int>(phase_);
+      const long steps0 = cur_->steps_since_restart();
+      const auto wall_adv = std::chrono::steady_clock::now();
       const auto st = cur_->advance(tout, t, ys_.data(), arming);
+      sum_.phase_wall[ph] +=
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_adv).count();
+      sum_.phase_steps[ph] += cur_->steps_since_restart() - steps0;
       {
         Vec7 q, v;
         to_full(ys_.data(), q, v);

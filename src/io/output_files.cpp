@@ -164,6 +164,18 @@ std::string summary_json(const RunSummary& s) {
   }
   field("phase_time", pt + "}");
   field("phase_fraction", pf + "}");
+  long measured = 0;
+  for (long n : s.phase_steps) measured += n;
+  if (measured > 0) {
+    std::string ps = "{", pw = "{";
+    for (int k = 0; k < kNumPhases; ++k) {
+      const auto name = to_string(static_cast<Phase>(k));
+      ps += fmt::format("{}\"{}\": {}", k ? ", " : "", name, s.phase_steps[k]);
+      pw += fmt::format("{}\"{}\": {}", k ? ", " : "", name, json_number(s.phase_wall[k]));
+    }
+    field("phase_steps", ps + "}");
+    field("phase_wall_seconds", pw + "}");
+  }
   field("max_penetration", json_number(s.max_penetration));
   field("min_F_N_in_contact", json_number(s.min_F_N_in_contact));
   field("max_cone_violation", json_number(s.max_cone_violation));

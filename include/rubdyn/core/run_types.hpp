@@ -89,6 +89,10 @@ struct RunSummary {
   long suppressed_witnesses = 0;  ///< witness roots ignored at the very start of a phase
   std::array<long, kNumEventKinds> events{};
   std::array<double, kNumPhases> phase_time{};  ///< simulated seconds spent in each phase
+  /// Event-driven solver: integrator steps and wall seconds spent integrating each phase (event
+  /// handling and output excluded); zero for solvers that do not measure them.
+  std::array<long, kNumPhases> phase_steps{};
+  std::array<double, kNumPhases> phase_wall{};
   // invariants
   double max_penetration = 0.0;  ///< max(-d_N, 0) over samples and step ends [m]
   double min_F_N_in_contact = std::numeric_limits<double>::quiet_NaN();
