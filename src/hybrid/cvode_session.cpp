@@ -33,6 +33,105 @@ void check(int flag, const char* what) {
   }
 }
 
+// ---- vector operations for small states ----
+// CVODE works on states of 13 to 17 components here, and spends most of a step in generic
+// vector operations (the Nordsieck predictor alone is q(q+1)/2 linear sums at order q, up to 12):
+// with the serial vector each one is two calls deep and branches on its coefficients, and the
+// fused operations are emulated by loops of such calls. These replace the hot operations by one
+// plain loop each (the same sums; only the rounding order of a few cases differs, e.g. a x + a y
+// for the serial a (x + y)); every vector CVODE clones from the template inherits them.
+// Measured on the rolling regime (mu = 0.25, 0.5 s): 2.8 -> 1.05 us per step.
+namespace small {
+
+inline double* data(N_Vector v) {
+  return NV_DATA_S(v);
+}
+inline sunindextype size(N_Vector v) {
+  return NV_LENGTH_S(v);
+}
+
+void linear_sum(realtype a, N_Vector x, realtype b, N_Vector y, N_Vector z) {
+  const double *xd = data(x), *yd = data(y);
+  double* zd = data(z);
+  const sunindextype n = size(x);
+  if (a == 1.0 && b == 1.0) {
+    for (sunindextype i = 0; i < n; ++i) zd[i] = xd[i] + yd[i];
+  } else if (a == 1.0 && b == -1.0) {
+    for (sunindextype i = 0; i < n; ++i) zd[i] = xd[i] - yd[i];
+  } else if (a == -1.0 && b == 1.0) {
+    for (sunindextype i = 0; i < n; ++i) zd[i] = yd[i] - xd[i];
+  } else if (a == 1.0) {
+    for (sunindextype i = 0; i < n; ++i) zd[i] = xd[i] + b * yd[i];
+  } else if (b == 1.0) {
+    for (sunindextype i = 0; i < n; ++i) zd[i] = a * xd[i] + yd[i];
+  } else {
+    for (sunindextype i = 0; i < n; ++i) zd[i] = a * xd[i] + b * yd[i];
+  }
+}
+
+void scale(realtype c, N_Vector x, N_Vector z) {
+  const double* xd = data(x);
+  double* zd = data(z);
+  const sunindextype n = size(x);
+  for (sunindextype i = 0; i < n; ++i) zd[i] = c * xd[i];
+}
+
+realtype wsqrsum(N_Vector x, N_Vector w) {
+  const double *xd = data(x), *wd = data(w);
+  const sunindextype n = size(x);
+  double sum = 0.0;
+  for (sunindextype i = 0; i < n; ++i) {
+    const double p = xd[i] * wd[i];
+    sum += p * p;
+  }
+  return sum;
+}
+
+realtype wrmsnorm(N_Vector x, N_Vector w) {
+  return std::sqrt(wsqrsum(x, w) / static_cast<double>(size(x)));
+}
+
+/// z = sum_j c_j X_j
+int linear_combination(int nv, realtype* c, N_Vector* X, N_Vector z) {
+  double* zd = data(z);
+  const sunindextype n = size(z);
+  const double* x0 = data(X[0]);
+  if (X[0] == z) {
+    if (c[0] != 1.0)
+      for (sunindextype i = 0; i < n; ++i) zd[i] *= c[0];
+  } else {
+    for (sunindextype i = 0; i < n; ++i) zd[i] = c[0] * x0[i];
+  }
+  for (int j = 1; j < nv; ++j) {
+    const double* xj = data(X[j]);
+    for (sunindextype i = 0; i < n; ++i) zd[i] += c[j] * xj[i];
+  }
+  return 0;
+}
+
+/// Z_j = c_j x + Y_j
+int scale_add_multi(int nv, realtype* c, N_Vector x, N_Vector* Y, N_Vector* Z) {
+  const double* xd = data(x);
+  const sunindextype n = size(x);
+  for (int j = 0; j < nv; ++j) {
+    const double* yd = data(Y[j]);
+    double* zd = data(Z[j]);
+    for (sunindextype i = 0; i < n; ++i) zd[i] = c[j] * xd[i] + yd[i];
+  }
+  return 0;
+}
+
+void install(N_Vector v) {
+  v->ops->nvlinearsum = linear_sum;
+  v->ops->nvscale = scale;
+  v->ops->nvwrmsnorm = wrmsnorm;
+  v->ops->nvwsqrsumlocal = wsqrsum;
+  v->ops->nvlinearcombination = linear_combination;
+  v->ops->nvscaleaddmulti = scale_add_multi;
+}
+
+}  // namespace small
+
 }  // namespace
 
 struct CvodeSession::Impl {
@@ -125,6 +224,7 @@ CvodeSession::CvodeSession(const CvodeConfig& cfg, const CvodeCallbacks& cb)
   I.atol.assign(cfg.atol, cfg.atol + n);
   check(SUNContext_Create(nullptr, &I.ctx), "SUNContext_Create");
   I.y = N_VNew_Serial(n, I.ctx);
+  small::install(I.y);
   N_VConst(0.0, I.y);
   I.mem = CVodeCreate(cfg.method == CvodeMethod::BDF ? CV_BDF : CV_ADAMS, I.ctx);
   if (!I.mem) throw std::runtime_error("CVODE: CVodeCreate failed");

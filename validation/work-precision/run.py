@@ -70,7 +70,8 @@ def run_all():
         chk_s, chk_g, _ = run_case(RUBDYN, os.path.join(OUT, case, "check-rtol1e-12"),
                                    te + ["--rtol", "1e-12", "--atol", "1e-14"], DT)
         refs[case] = (ref_s, grid_errors(chk_g, ref_g), ref_g[max(ref_g)][2])
-        jobs = [("event-bdf", "rtol", r, event_args(r)) for r in EVENT_RTOLS]
+        jobs = [("event-bdf", "rtol", r, event_args(r) + ["--method", "bdf"])
+                for r in EVENT_RTOLS]
         jobs += [("event-adams", "rtol", r, event_args(r) + ["--method", "adams"])
                  for r in EVENT_RTOLS]
         jobs += [(s, "h", h, ["--solver", s, "--h", h]) for s in FIXED for h in STEPS[case]]

@@ -63,7 +63,10 @@ enum class ContactFormulation {
 struct EventDrivenOptions {
   double rtol = 1e-10;
   double atol = 1e-12;  ///< absolute tolerance on positions [m]; velocities: atol * 1e3 [m/s]
-  bool adams = false;   ///< free flight with Adams-Moulton instead of BDF
+  /// Free flight with Adams-Moulton (fixed-point iteration) instead of BDF. Measured on the
+  /// reference case at rtol 1e-10: 3324 steps at 0.9 us vs 4801 at 1.9 us, orbit error
+  /// 3.6e-11 m vs 2.1e-10 m.
+  bool adams = true;
   ContactFormulation contact_phases = ContactFormulation::Reduced;
   bool contact_adams = true;  ///< reduced contact phases with Adams (false: BDF)
   /// Adams phases solve their implicit corrector by fixed-point iteration (no Jacobian, no

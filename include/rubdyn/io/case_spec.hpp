@@ -26,9 +26,9 @@ struct RunOptions {
 struct SolverOptions {
   std::string kind = "event";  ///< event | carp-onevc | carp-qn | mj | mj-proj
   // event-driven
-  double rtol = 1e-10;         ///< relative tolerance
-  double atol = 1e-12;         ///< absolute tolerance, scaled per component by the solver
-  std::string method = "bdf";  ///< free flight: bdf | adams (CVODE multistep family)
+  double rtol = 1e-10;           ///< relative tolerance
+  double atol = 1e-12;           ///< absolute tolerance, scaled per component by the solver
+  std::string method = "adams";  ///< free flight: adams | bdf (CVODE multistep family)
   std::string contact_phases = "reduced";  ///< reduced (minimal coordinates) | projection (DAE)
   std::string contact_method = "adams";    ///< reduced contact phases: adams | bdf
   double max_events_per_second = 1e6;      ///< chattering guard: events per simulated second
