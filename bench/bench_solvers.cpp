@@ -1,8 +1,13 @@
-// Run time of every solver on the reference case (cmake -DRUBDYN_BUILD_BENCH=ON; run
-// build/bench/rubdyn_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true).
+// Run time of every solver on the reference case and on its rolling variant (mu = 0.25), side by
+// side in one run (cmake -DRUBDYN_BUILD_BENCH=ON; bench/run.sh writes bench/RESULTS.md).
 // Fixed-step schemes report steps per wall second (counter "steps/s"); the event-driven
-// integrator reports its wall time per run and its steps.
+// integrator also reports its cost per step in each phase ("free_us", "slip_us", "stick_us":
+// microseconds of integration per integrator step, measured by the integrator itself, event
+// handling excluded).
 #include <benchmark/benchmark.h>
+
+#include <array>
+#include <initializer_list>
 
 #include "rubdyn/hybrid/event_driven.hpp"
 #include "rubdyn/model/rotor_stator_model.hpp"
@@ -26,16 +31,23 @@ MechanicalState reference_start() {
   return s;
 }
 
-void fixed_step(benchmark::State& st, FixedStepScheme scheme) {
-  const RotorStatorModel model(RotorStatorParams{});
+/// The reference case with friction coefficient mu (0.25: whip, then rolling from ~0.12 s).
+RotorStatorParams with_mu(double mu) {
+  RotorStatorParams p;
+  p.contact.mu = mu;
+  return p;
+}
+
+void fixed_step(benchmark::State& st, FixedStepScheme scheme, double mu, double t_end, double h) {
+  const RotorStatorModel model(with_mu(mu));
   FixedStepOptions o;
   o.scheme = scheme;
-  o.h = 1e-6;
+  o.h = h;
   o.output_dt = 1e-4;
   long steps = 0;
   for (auto _ : st) {
     NullSink sink;
-    const RunSummary s = run_fixed_step(model, reference_start(), 0.03, o, sink);
+    const RunSummary s = run_fixed_step(model, reference_start(), t_end, o, sink);
     steps += s.steps;
     benchmark::DoNotOptimize(s.omega_final);
   }
@@ -43,36 +55,78 @@ void fixed_step(benchmark::State& st, FixedStepScheme scheme) {
       benchmark::Counter(static_cast<double>(steps), benchmark::Counter::kIsRate);
 }
 
-void event_driven(benchmark::State& st, double t_end, double rtol) {
-  const RotorStatorModel model(RotorStatorParams{});
+void event_driven(benchmark::State& st, double mu, double t_end, double rtol,
+                  ContactFormulation contact) {
+  const RotorStatorModel model(with_mu(mu));
   EventDrivenOptions o;
   o.rtol = rtol;
   o.atol = 1e-2 * rtol;
   o.output_dt = 1e-4;
   o.omega_lim = 2110.0;
+  o.contact_phases = contact;
   long steps = 0;
+  std::array<long, kNumPhases> phase_steps{};
+  std::array<double, kNumPhases> phase_wall{};
   for (auto _ : st) {
     NullSink sink;
     const RunSummary s = run_event_driven(model, reference_start(), t_end, o, sink);
     steps += s.steps;
+    for (int k = 0; k < kNumPhases; ++k) {
+      phase_steps[k] += s.phase_steps[k];
+      phase_wall[k] += s.phase_wall[k];
+    }
     benchmark::DoNotOptimize(s.omega_final);
   }
   st.counters["steps/s"] =
       benchmark::Counter(static_cast<double>(steps), benchmark::Counter::kIsRate);
+  auto us_per_step = [&](std::initializer_list<Phase> phases) {
+    long n = 0;
+    double w = 0.0;
+    for (Phase p : phases) {
+      n += phase_steps[static_cast<int>(p)];
+      w += phase_wall[static_cast<int>(p)];
+    }
+    return n > 0 ? 1e6 * w / static_cast<double>(n) : 0.0;
+  };
+  st.counters["free_us"] = us_per_step({Phase::Free});
+  st.counters["slip_us"] = us_per_step({Phase::SlipPos, Phase::SlipNeg});
+  st.counters["stick_us"] = us_per_step({Phase::Stick});
 }
+
+constexpr auto kReduced = ContactFormulation::Reduced;
+constexpr auto kProjection = ContactFormulation::Projection;
 
 }  // namespace
 
-BENCHMARK_CAPTURE(fixed_step, carp_onevc_30ms_h1e6, FixedStepScheme::CarpOneVC)
+// the reference case (mu = 0.1): 30 ms at h = 1e-6, and the event-driven solver
+BENCHMARK_CAPTURE(fixed_step, carp_onevc_30ms_h1e6, FixedStepScheme::CarpOneVC, 0.1, 0.03, 1e-6)
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(fixed_step, carp_qn_30ms_h1e6, FixedStepScheme::CarpQN)
+BENCHMARK_CAPTURE(fixed_step, carp_qn_30ms_h1e6, FixedStepScheme::CarpQN, 0.1, 0.03, 1e-6)
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(fixed_step, mj_30ms_h1e6, FixedStepScheme::MoreauJean)
+BENCHMARK_CAPTURE(fixed_step, mj_30ms_h1e6, FixedStepScheme::MoreauJean, 0.1, 0.03, 1e-6)
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(fixed_step, mj_proj_30ms_h1e6, FixedStepScheme::MoreauJeanProjected)
+BENCHMARK_CAPTURE(fixed_step, mj_proj_30ms_h1e6, FixedStepScheme::MoreauJeanProjected, 0.1, 0.03,
+                  1e-6)
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(event_driven, event_30ms_rtol1e10, 0.03, 1e-10)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(event_driven, event_500ms_rtol1e9, 0.5, 1e-9)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(event_driven, event_500ms_rtol1e10, 0.5, 1e-10)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(event_driven, event_30ms_rtol1e10, 0.1, 0.03, 1e-10, kReduced)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(event_driven, event_500ms_rtol1e9, 0.1, 0.5, 1e-9, kReduced)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(event_driven, event_500ms_rtol1e10, 0.1, 0.5, 1e-10, kReduced)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(event_driven, event_500ms_rtol1e10_projection, 0.1, 0.5, 1e-10, kProjection)
+    ->Unit(benchmark::kMillisecond);
+// the rolling regime (mu = 0.25, 0.5 s; 77 % of it in stick): the event-driven solver against
+// rubdyn's mj at h = 1e-7 (issue 11's target), and the projection formulation on the first
+// 0.15 s (35 ms of stick; the whole run takes about a minute)
+BENCHMARK_CAPTURE(event_driven, mu025_event_500ms_rtol1e10, 0.25, 0.5, 1e-10, kReduced)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(fixed_step, mu025_mj_500ms_h1e7, FixedStepScheme::MoreauJean, 0.25, 0.5, 1e-7)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(event_driven, mu025_event_150ms_rtol1e10, 0.25, 0.15, 1e-10, kReduced)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(event_driven, mu025_event_150ms_rtol1e10_projection, 0.25, 0.15, 1e-10,
+                  kProjection)
+    ->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

@@ -170,6 +170,31 @@ def goals(rows):
                          ratio, r["case"], r["solver"], r["value"], r["wall_median"],
                          e["solver"], e["value"], e["wall_median"],
                          "met" if ratio > 1 else "NOT met"))
+    # (c) crossover: per case, the most accurate fixed-step point that the event-driven solver
+    # does not beat (slower at equal or better accuracy on both measures, or never as accurate);
+    # below its orbit error the event-driven solver is the fastest at every point
+    for case in CASES:
+        lost = []
+        for r in rows:
+            if (r["case"] != case or r["solver"].startswith("event") or
+                    r["solver"].startswith("siconos") or r["termination"] != "completed"):
+                continue
+            ok = [e for e in rows if e["case"] == case and e["solver"].startswith("event")
+                  and e["termination"] == "completed" and e["orbit_error"] <= r["orbit_error"]
+                  and e["omega_error"] <= r["omega_error"]]
+            if not ok or min(e["wall_median"] for e in ok) >= r["wall_median"]:
+                lost.append(r)
+        if not lost:
+            lines.append("(c) crossover, %s: the event-driven solver is faster than every "
+                         "fixed-step point at equal or better accuracy" % case)
+        else:
+            r = min(lost, key=lambda x: x["orbit_error"])
+            lines.append("(c) crossover, %s: the event-driven solver is the fastest at every "
+                         "fixed-step point with an orbit error below %.1e m; above it %d points "
+                         "are cheaper (the most accurate: %s h=%s, orbit %.1e m, omega %.1e "
+                         "rad/s, %.3g s)" % (case, r["orbit_error"], len(lost), r["solver"],
+                                             r["value"], r["orbit_error"], r["omega_error"],
+                                             r["wall_median"]))
     sic = [r for r in rows if r["solver"] == "siconos-mj" and float(r["value"]) == 1e-7]
     for r in sic:
         # the cheapest event-driven run at least as accurate on both measures
