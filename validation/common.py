@@ -23,12 +23,10 @@ def machine():
     return "%s, %s, %d cores" % (cpu, platform.machine(), os.cpu_count() or 0)
 
 
-def run_case(rubdyn, folder, args, dt=1e-4):
-    """Runs `rubdyn run` on the reference case into folder; returns (summary dict, grid) with
-    grid[k] = (x_r, y_r, omega) at t = k dt (the output grid; event rows are skipped), and the
-    list of events as (t, kind)."""
-    subprocess.run([rubdyn, "run", CASE, "--out", folder, "--quiet"] + args, check=True,
-                   stdout=subprocess.DEVNULL)
+def read_output(folder, dt=1e-4, last=False):
+    """Reads an output folder: (summary dict, grid, events) with grid[k] = {column: value} for
+    the rows at t = k dt (the output grid; at an event on a grid time the row before the event,
+    or with last=True the one after it) and events as (t, kind)."""
     with open(os.path.join(folder, "summary.json")) as f:
         summary = json.load(f)
     grid = {}
@@ -36,10 +34,21 @@ def run_case(rubdyn, folder, args, dt=1e-4):
         for r in csv.DictReader(f):
             t = float(r["t"])
             k = round(t / dt)
-            if abs(t - k * dt) < 1e-9 and k not in grid:
-                grid[k] = (float(r["x_r"]), float(r["y_r"]), float(r["omega"]))
+            if abs(t - k * dt) < 1e-9 and (last or k not in grid):
+                grid[k] = {c: float(v) for c, v in r.items() if c != "phase"}
     with open(os.path.join(folder, "events.csv")) as f:
         events = [(float(r["t"]), r["kind"]) for r in csv.DictReader(f)]
+    return summary, grid, events
+
+
+def run_case(rubdyn, folder, args, dt=1e-4):
+    """Runs `rubdyn run` on the reference case into folder; returns (summary dict, grid) with
+    grid[k] = (x_r, y_r, omega) at t = k dt (the output grid; event rows are skipped), and the
+    list of events as (t, kind)."""
+    subprocess.run([rubdyn, "run", CASE, "--out", folder, "--quiet"] + args, check=True,
+                   stdout=subprocess.DEVNULL)
+    summary, rows, events = read_output(folder, dt)
+    grid = {k: (r["x_r"], r["y_r"], r["omega"]) for k, r in rows.items()}
     return summary, grid, events
 
 

@@ -361,6 +361,19 @@ GridDiff grid_difference(const MemorySink& a, const MemorySink& b, double dt) {
   }
   return d;
 }
+
+/// The same run with contact phases in minimal coordinates and as the DAE with projection.
+struct BothFormulations {
+  MemorySink red, proj;
+  RunSummary sr, sp;
+  BothFormulations(const LagrangianModel& model, const MechanicalState& s0, double t_end,
+                   EventDrivenOptions opt) {
+    opt.contact_phases = ContactFormulation::Reduced;
+    sr = run_event_driven(model, s0, t_end, opt, red);
+    opt.contact_phases = ContactFormulation::Projection;
+    sp = run_event_driven(model, s0, t_end, opt, proj);
+  }
+};
 }  // namespace
 
 TEST_CASE("Reduced and projection contact phases agree: impacts, sliding and lift-offs",
@@ -368,16 +381,12 @@ TEST_CASE("Reduced and projection contact phases agree: impacts, sliding and lif
   const RotorStatorModel model(RotorStatorParams{});
   MechanicalState s0;
   s0.v[TH] = 2000.0;
-  EventDrivenOptions opt;
-  MemorySink red, proj;
-  opt.contact_phases = ContactFormulation::Reduced;
-  const RunSummary sr = run_event_driven(model, s0, 0.03, opt, red);
-  opt.contact_phases = ContactFormulation::Projection;
-  const RunSummary sp = run_event_driven(model, s0, 0.03, opt, proj);
-  REQUIRE(sr.complete());
-  REQUIRE(sp.complete());
-  REQUIRE(sr.events == sp.events);
-  const GridDiff d = grid_difference(red, proj, opt.output_dt);
+  const EventDrivenOptions opt;
+  const BothFormulations b(model, s0, 0.03, opt);
+  REQUIRE(b.sr.complete());
+  REQUIRE(b.sp.complete());
+  REQUIRE(b.sr.events == b.sp.events);
+  const GridDiff d = grid_difference(b.red, b.proj, opt.output_dt);
   REQUIRE(d.n == 301);
   INFO("orbit " << d.orbit << " m, omega " << d.omega << " rad/s");
   CHECK(d.orbit <= 1e-10);
@@ -398,16 +407,13 @@ TEST_CASE("Reduced and projection contact phases agree while rolling (stick)", "
   EventDrivenOptions opt;
   opt.rtol = 1e-12;
   opt.atol = 1e-14;
-  MemorySink red, proj;
-  opt.contact_phases = ContactFormulation::Reduced;
-  const RunSummary sr = run_event_driven(model, s0, 0.01, opt, red);
-  opt.contact_phases = ContactFormulation::Projection;
-  const RunSummary sp = run_event_driven(model, s0, 0.01, opt, proj);
+  const BothFormulations b(model, s0, 0.01, opt);
+  const RunSummary &sr = b.sr, &sp = b.sp;
   REQUIRE(sr.complete());
   REQUIRE(sp.complete());
   REQUIRE(sr.events == sp.events);
   REQUIRE(sr.phase_time[static_cast<int>(Phase::Stick)] > 0.003);
-  const GridDiff d = grid_difference(red, proj, opt.output_dt);
+  const GridDiff d = grid_difference(b.red, b.proj, opt.output_dt);
   INFO("orbit " << d.orbit << " m, omega " << d.omega << " rad/s");
   CHECK(d.orbit <= 1e-9);
   CHECK(d.omega <= 2e-5);

@@ -22,9 +22,7 @@ subset, written to out/rolling/quick/ so that the committed tables are not repla
 Usage: validation/rolling/run.py [path/to/rubdyn] [--quick] [--full] [--selftest]
 """
 import argparse
-import csv
 import datetime
-import json
 import math
 import os
 import shutil
@@ -38,7 +36,7 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 sys.path.insert(0, HERE)
-from common import CASE, ROOT, machine, script_args, write_csv  # noqa: E402
+from common import CASE, ROOT, machine, read_output, script_args, write_csv  # noqa: E402
 import reference as ref  # noqa: E402
 from onset import find_onset  # noqa: E402
 
@@ -97,17 +95,7 @@ def rubdyn_run(rubdyn, name, args):
     wall = time.perf_counter() - t0
     if p.returncode not in (0, 3):
         return Run(folder, {}, {}, [], wall, p.returncode, p.stderr.strip())
-    with open(os.path.join(folder, "summary.json")) as f:
-        summary = json.load(f)
-    grid = {}
-    with open(os.path.join(folder, "timeseries.csv")) as f:
-        for r in csv.DictReader(f):
-            t = float(r["t"])
-            k = round(t / DT)
-            if abs(t - k * DT) < 1e-9:
-                grid[k] = {c: float(v) for c, v in r.items() if c != "phase"}  # last row wins
-    with open(os.path.join(folder, "events.csv")) as f:
-        events = [(float(r["t"]), r["kind"]) for r in csv.DictReader(f)]
+    summary, grid, events = read_output(folder, DT, last=True)
     return Run(folder, summary, grid, events, wall, p.returncode, p.stderr.strip())
 
 
