@@ -1,6 +1,6 @@
 // Fixed-step schemes: Carpenter (one-VC, QN) and Moreau-Jean (plain, projected).
 // Decisions left open by the paper are stated where they are taken (see also
-// shared/design/time-steppers.md and include/rubdyn/stepping/fixed_step.hpp).
+// include/rubdyn/stepping/fixed_step.hpp).
 #include "rubdyn/stepping/fixed_step.hpp"
 
 #include <fmt/format.h>

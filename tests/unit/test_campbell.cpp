@@ -151,7 +151,7 @@ TEST_CASE("Campbell frequencies and whirl labels match the complex-coordinate qu
     CHECK(m.f1f == Approx(c.f1b).epsilon(1e-11));
     CHECK(m.f2b == Approx(c.f2f).epsilon(1e-11));
   }
-  // the story of the reference case (shared/spec/reference-case.toml): first backward mode
+  // the story of the reference case (cases/reference.toml): first backward mode
   // "about 88 Hz" at omega_lim; the spec rounds to the hertz
   CHECK(s.solve(2110.0).f1b == Approx(88.0).margin(1.0));
 }

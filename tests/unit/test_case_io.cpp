@@ -95,7 +95,7 @@ std::string bad(const std::string& section, const std::string& key, const std::s
 
 TEST_CASE("The reference case file has the spec's values", "[io]") {
   const CaseSpec c = load_case(std::string(RUBDYN_SOURCE_DIR) + "/cases/reference.toml");
-  // values of shared/spec/reference-case.toml
+  // the reference parameter set
   CHECK(c.name == "reference");
   CHECK(c.params.rotor.mass == 5.0);
   CHECK(c.params.rotor.Jd == 0.035);

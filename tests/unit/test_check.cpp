@@ -25,7 +25,7 @@ constexpr double kTwoPi = 2.0 * std::numbers::pi;
 TEST_CASE("Derived quantities of the reference case, by hand", "[check]") {
   const RotorStatorParams p;  // the reference case
   const DerivedQuantities d = compute_derived_quantities(p, 2000.0, 2110.0);
-  // Hand values from shared/spec/reference-case.toml. Each is a few floating-point operations
+  // Hand values from the reference case's parameters. Each is a few floating-point operations
   // on the inputs: a few ulps, so 1e-14 relative.
   //   l = 0.5 - 0.1 = 0.4, nu = 0.3 / 0.4 = 0.75, Jd / l^2 = 0.035 / 0.16 = 0.21875
   CHECK(d.l == Approx(0.4).epsilon(1e-14));

@@ -32,7 +32,7 @@ struct LoadParams {
   double torque = 20.0;   ///< driving torque tau_a [N m]
 };
 
-/// Defaults are the reference case of shared/spec/reference-case.toml.
+/// Defaults are the reference case (cases/reference.toml).
 struct RotorStatorParams {
   RotorParams rotor;
   BearingParams bearing;

@@ -1,6 +1,7 @@
 #pragma once
 // Fixed-step validation schemes on the same model and contact law as the event-driven integrator
-// (paper, section 4.2-4.3, Table 1; decisions in shared/design/time-steppers.md):
+// (paper, section 4.2-4.3, Table 1; the decisions it leaves open are stated in fixed_step.cpp
+// where they are taken):
 //   carp-onevc  Carpenter, Algorithm 1 (central differences, one verification/correction)
 //   carp-qn     Carpenter inside a quasi-Newton loop (Roques et al., JSV 329, 2010)
 //   mj          Moreau-Jean theta-method, velocity-level Signorini + Coulomb cone, Newton impact
