@@ -406,14 +406,18 @@ class Integrator {
 
   void end_phase(double t) { sum_.phase_time[static_cast<int>(phase_)] += t - phase_start_; }
 
-  /// Quadratures (works) at t inside the last step of the current session.
+  /// The works carried in a session state of the current phase.
+  std::array<double, kNw> works_of(const SessionState& ys) const {
+    std::array<double, kNw> w{};
+    std::copy(ys.begin() + n_, ys.begin() + n_ + kNw, w.begin());
+    return w;
+  }
+  /// Works at t inside the last step of the current session.
   void works_at(double t) {
     SessionState ys{};
     cur_->dky(t, 0, ys.data());
-    std::copy(ys.begin() + n_, ys.begin() + n_ + kNw, work_.begin());
+    work_ = works_of(ys);
   }
-  /// Works at the session's last returned state.
-  void works_now() { std::copy(ys_.begin() + n_, ys_.begin() + n_ + kNw, work_.begin()); }
 
   void fail(Termination why, const std::string& msg) {
     sum_.termination = why;
@@ -685,22 +689,31 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
   sum_.solver = "event";
   sum_.options = fmt::format(
       "{{\"rtol\": {:.3g}, \"atol\": {:.3g}, \"free_flight\": \"{}\", \"contact_phases\": "
-      "\"{}\", \"nonlinear_solver\": \"{}\", \"output_dt\": {:.6g}}}",
+      "\"{}\", \"adams_iteration\": \"{}\", \"output_dt\": {:.6g}}}",
       opt_.rtol, opt_.atol, opt_.adams ? "adams" : "bdf",
       chart_ ? (opt_.contact_adams ? "reduced+adams" : "reduced+bdf") : "bdf+projection",
-      opt_.fixed_point ? "fixed-point (adams)" : "newton", opt_.output_dt);
+      opt_.fixed_point ? "fixed-point" : "newton", opt_.output_dt);
   sum_.t_start = init.t;
   sum_.t_end_requested = t_end;
 
-  // sessions: free flight and the contact phases of the chosen formulation
-  // works: absolute tolerance 1e-9 J
+  // sessions: free flight and the contact phases of the chosen formulation.
+  // Error weights of a session state (p, p', works) with d coordinates: a coordinate that is a
+  // full one (length 0) has rtol |p| + atol_q; an angle that moves the contact point by L per
+  // radian is weighted by the displacement it causes, absolutely, at the gap's scale:
+  // (rtol g0 + atol_q) / L (contact_chart.hpp). Rates: rtol |p'| + atol_v; works: rtol |W| + 1e-9
+  // J.
+  auto weights = [&](int d, const ChartScales& sc, SessionState& rt, SessionState& at) {
+    rt.fill(opt_.rtol);
+    at.fill(1e-9);
+    for (int i = 0; i < d; ++i) {
+      const double L = sc.length[i];
+      rt[i] = L > 0.0 ? 0.0 : opt_.rtol;
+      at[i] = L > 0.0 ? (opt_.rtol * g0_ + atol_q_) / L : atol_q_;
+      at[d + i] = atol_v_;
+    }
+  };
   SessionState rtol{}, atol{};
-  rtol.fill(opt_.rtol);
-  atol.fill(1e-9);
-  for (int i = 0; i < kNumDofs; ++i) {
-    atol[i] = atol_q_;
-    atol[kNumDofs + i] = atol_v_;
-  }
+  weights(kNumDofs, ChartScales{}, rtol, atol);
   const detail::CvodeCallbacks cb_free{&rhs, &jac, &roots, nullptr, this};
   const detail::CvodeCallbacks cb_contact{&rhs, nullptr, &roots, &proj, this};
   const detail::CvodeCallbacks cb_reduced{&rhs, nullptr, &roots, nullptr, this};
@@ -724,24 +737,10 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
       contact_ = std::make_unique<detail::CvodeSession>(
           config(kN, detail::CvodeMethod::BDF, rtol.data(), atol.data()), cb_contact);
     } else {
-      // Tolerances in minimal coordinates: a coordinate that copies a full one keeps its
-      // weights; an angle that moves the contact point by L per radian is weighted by the
-      // displacement it causes, absolutely, at the gap's scale (contact_chart.hpp).
       for (ChartMode mode : {ChartMode::Slip, ChartMode::Stick}) {
         const int d = chart_->dim(mode);
-        const ChartScales sc = chart_->scales(mode);
         SessionState rt{}, at{};
-        for (int i = 0; i < kNw; ++i) {
-          rt[2 * d + i] = opt_.rtol;
-          at[2 * d + i] = 1e-9;
-        }
-        for (int i = 0; i < d; ++i) {
-          const double L = sc.length[i];
-          rt[i] = L > 0.0 ? 0.0 : opt_.rtol;
-          at[i] = L > 0.0 ? (opt_.rtol * g0_ + atol_q_) / L : atol_q_;
-          rt[d + i] = opt_.rtol;
-          at[d + i] = atol_v_;
-        }
+        weights(d, chart_->scales(mode), rt, at);
         (mode == ChartMode::Slip ? slip_ : stick_) = std::make_unique<detail::CvodeSession>(
             config(2 * d, method(opt_.contact_adams), rt.data(), at.data()), cb_reduced);
       }
@@ -964,7 +963,7 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
         root_without_restart_ = true;
         t_last_root_ = t;
         y_last_root_ = y;
-        std::copy(ys_.begin() + n_, ys_.begin() + n_ + kNw, work_last_root_.begin());
+        work_last_root_ = works_of(ys_);
       }
       if (restart_needed) {
         // the event handler restarted the integration at its (polished) event time
@@ -984,7 +983,7 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
   // Close the books.
   end_phase(t);
   sum_.t_reached = t;
-  if (cur_) works_now();
+  if (cur_) work_ = works_of(ys_);
   Vec7 q, v;
   state_from(y, q, v);
   sum_.energy_final = m_.kinetic_energy(q, v) + m_.potential_energy(q);
