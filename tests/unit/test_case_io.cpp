@@ -233,6 +233,10 @@ TEST_CASE("Solver and output rules", "[io]") {
             .find("mass or identity") != std::string::npos);
   CHECK(one_issue(solver("method = \"rk4\""), "solver.method", 31).find("bdf or adams") !=
         std::string::npos);
+  CHECK(one_issue(solver("contact_phases = \"dae\""), "solver.contact_phases", 31)
+            .find("reduced or projection") != std::string::npos);
+  CHECK(one_issue(solver("contact_method = \"rk4\""), "solver.contact_method", 31)
+            .find("bdf or adams") != std::string::npos);
   const std::string out = std::string(kValid) + "[output]\ndt = 0.0\n";
   CHECK(one_issue(out, "output.dt", 31).find("> 0") != std::string::npos);
 }
