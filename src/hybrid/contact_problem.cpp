@@ -6,6 +6,8 @@
 #include <cmath>
 #include <optional>
 
+#include "rubdyn/contact/coulomb_signorini.hpp"
+
 namespace rubdyn {
 
 void compute_contact_operators(const LagrangianModel& m, double t, const Vec7& q, const Vec7& v,
@@ -41,189 +43,97 @@ void update_contact_velocity(const LagrangianModel& m, double t, const Vec7& q, 
   op.b_T = op.c.W_T.dot(op.Minv_f) + op.c.wdot_T;
 }
 
-PhaseDynamics phase_dynamics(const ContactOperators& op, Phase phase, double mu) {
+namespace {
+
+/// The acceleration-level problem at a contact point: u0 = (b_N, b_T), r = (F_N, F_T).
+LocalProblem acceleration_problem(const ContactOperators& op, double mu) {
+  LocalProblem p;
+  p.A_NN = op.A_NN;
+  p.A_NT = op.A_NT;
+  p.A_TT = op.A_TT;
+  p.u_N = op.b_N;
+  p.u_T = op.b_T;
+  p.mu = mu;
+  return p;
+}
+
+PhaseDynamics dynamics_of(const ContactOperators& op, const ModeSolution& m) {
   PhaseDynamics d;
-  switch (phase) {
-    case Phase::Free:
-      d.a = op.Minv_f;
-      d.normal_mass = op.A_NN;
-      break;
-    case Phase::SlipPos:
-    case Phase::SlipNeg: {
-      const double s = phase == Phase::SlipPos ? 1.0 : -1.0;
-      d.normal_mass = op.A_NN - mu * s * op.A_NT;
-      d.well_posed = d.normal_mass > 0.0;
-      // with normal_mass < 0 (Painleve) the slip equations may still have a solution F_N >= 0:
-      // it is computed so that mode selection can see the non-uniqueness
-      d.F_N = d.normal_mass != 0.0 ? -op.b_N / d.normal_mass : 0.0;
-      d.F_T = -mu * s * d.F_N;
-      d.a = op.Minv_f + op.Minv_WN * d.F_N + op.Minv_WT * d.F_T;
-      break;
-    }
-    case Phase::Stick: {
-      const double det = op.A_NN * op.A_TT - op.A_NT * op.A_NT;
-      d.normal_mass = op.A_TT > 0.0 ? det / op.A_TT : 0.0;
-      d.well_posed = det > 0.0;
-      if (d.well_posed) {
-        d.F_N = -(op.A_TT * op.b_N - op.A_NT * op.b_T) / det;
-        d.F_T = -(-op.A_NT * op.b_N + op.A_NN * op.b_T) / det;
-      }
-      d.a = op.Minv_f + op.Minv_WN * d.F_N + op.Minv_WT * d.F_T;
-      break;
-    }
-  }
+  d.F_N = m.r_N;
+  d.F_T = m.r_T;
+  d.normal_mass = m.normal_mass;
+  d.well_posed = m.well_posed;
+  d.a = op.Minv_f + op.Minv_WN * d.F_N + op.Minv_WT * d.F_T;
   return d;
+}
+
+}  // namespace
+
+PhaseDynamics phase_dynamics(const ContactOperators& op, Phase phase, double mu) {
+  if (phase == Phase::Free) {
+    PhaseDynamics d;
+    d.a = op.Minv_f;
+    d.normal_mass = op.A_NN;
+    return d;
+  }
+  return dynamics_of(op, solve_in_mode(acceleration_problem(op, mu), phase));
 }
 
 ModeDecision select_mode(const ContactOperators& op, double mu, double v_t_eps, double rel_tol,
                          std::optional<Phase> ending, double force_scale) {
-  // Candidate consistency at acceleration level (d_N = 0 and v_N = 0 assumed):
-  //   free:   b_N >= 0 (the gap does not close)
-  //   slip s: well posed, F_N >= 0, and, when v_t = 0, sliding starts in direction s
-  //           (s v_t' >= 0 with v_t' = A_TN F_N + A_TT F_T + b_T)
-  //   stick:  F_N >= 0, |F_T| <= mu F_N
-  // Each inequality is classified as strict (margin > rel_tol times its scale), boundary
-  // (|margin| <= that) or violated. A unique strictly consistent candidate is taken. Otherwise:
-  //   several strict:  non-unique (Painleve); the least-force candidate is kept (free, then
-  //                    stick, then slip), and the decision is flagged;
-  //   only boundary:   the regular case of an event exactly at a witness zero (lift-off,
-  //                    stick -> slip): the continuation is the mode the witness leads into,
-  //                    free before slip before stick;
-  //   none:            inconsistent (Painleve); phase Free with n_consistent = 0.
-  // `ending`: the phase whose witness just crossed zero (with a nonzero slope: the root finder
-  // sees only sign changes). It cannot continue, although at the event its margin is zero and
-  // thus "boundary": it is dropped from the candidates while another one is consistent.
-  // Keeping it would restart the same phase with its witness falling through zero again (a
-  // loop of events at one instant: stick -> stick at a lift-off whose cone margin and normal
-  // force vanish together; slip -> slip at a lift-off with a stiff stator).
-  // The band is relative to the accelerations at the event and to the phase's force scale: at
-  // a lift-off both F_N and b_N vanish, and a margin that is zero to the accuracy of the root
-  // location (relative to the forces the phase had) must count as zero.
-  ModeDecision out;
+  // The acceleration-level Coulomb-Signorini problem (coulomb_signorini.hpp, with its tie rule)
+  // at d_N = 0, v_N = 0; a contact sliding faster than v_t_eps keeps its direction.
+  // The band is relative to the accelerations at the event and to the ending phase's force
+  // scale: at a lift-off both F_N and b_N vanish, and a margin that is zero to the accuracy of
+  // the root location (relative to the forces the phase had) must count as zero.
+  LocalProblem p = acceleration_problem(op, mu);
+  if (mu > 0.0 && std::abs(op.c.v_t) > v_t_eps) p.sliding = op.c.v_t > 0.0 ? 1 : -1;
   const double acc_scale = std::abs(op.b_N) + std::abs(op.b_T) + force_scale * op.A_NN;
-  const double tol_acc = rel_tol * acc_scale + 1e-300;
-  const double tol_F = tol_acc / std::max(op.A_NN, 1e-300);
-  enum Level { Violated = 0, Boundary = 1, Strict = 2 };
-  auto level = [](double margin, double tol) {
-    return margin > tol ? Strict : (margin >= -tol ? Boundary : Violated);
-  };
-  struct Cand {
-    Phase phase;
-    PhaseDynamics dyn;
-    Level lv;
-  };
-  Cand cands[4];
-  int n = 0;
-  const bool sliding = std::abs(op.c.v_t) > v_t_eps;
-  cands[n++] = {Phase::Free, phase_dynamics(op, Phase::Free, mu), level(op.b_N, tol_acc)};
-  auto slip_level = [&](Phase p, const PhaseDynamics& d) {
-    if (d.normal_mass == 0.0) return Violated;
-    Level lv = level(d.F_N, tol_F);
-    if (!sliding && mu > 0.0) {
-      const double s = p == Phase::SlipPos ? 1.0 : -1.0;
-      const double vt_dot = op.A_NT * d.F_N + op.A_TT * d.F_T + op.b_T;
-      lv = std::min(lv, level(s * vt_dot, tol_acc));
-    }
-    return lv;
-  };
-  if (mu == 0.0) {
-    // No friction: no stick mode, and the slip direction is irrelevant (F_T = 0).
-    PhaseDynamics d = phase_dynamics(op, Phase::SlipPos, 0.0);
-    cands[n++] = {Phase::SlipPos, d, slip_level(Phase::SlipPos, d)};
-  } else if (sliding) {
-    const Phase p = op.c.v_t > 0.0 ? Phase::SlipPos : Phase::SlipNeg;
-    PhaseDynamics d = phase_dynamics(op, p, mu);
-    cands[n++] = {p, d, slip_level(p, d)};
-  } else {
-    for (Phase p : {Phase::SlipPos, Phase::SlipNeg}) {
-      PhaseDynamics d = phase_dynamics(op, p, mu);
-      cands[n++] = {p, d, slip_level(p, d)};
-    }
-    PhaseDynamics ds = phase_dynamics(op, Phase::Stick, mu);
-    Level lv = ds.well_posed ? std::min(level(ds.F_N, tol_F),
-                                        level(mu * ds.F_N - std::abs(ds.F_T), mu * tol_F))
-                             : Violated;
-    cands[n++] = {Phase::Stick, ds, lv};
-  }
-  if (ending) {
-    bool other = false;
-    for (int i = 0; i < n; ++i) other |= cands[i].phase != *ending && cands[i].lv != Violated;
-    if (other) {
-      for (int i = 0; i < n; ++i)
-        if (cands[i].phase == *ending) cands[i].lv = Violated;
-    }
-  }
-  int n_strict = 0, n_boundary = 0, first_strict = -1, first_boundary = -1;
-  for (int i = 0; i < n; ++i) {
-    if (cands[i].lv == Strict) {
-      if (first_strict < 0) first_strict = i;
-      ++n_strict;
-    } else if (cands[i].lv == Boundary) {
-      if (first_boundary < 0) first_boundary = i;
-      ++n_boundary;
-    }
-  }
-  out.n_consistent = n_strict + n_boundary;
-  if (n_strict == 0 && n_boundary == 0) {
+  p.tol_u = rel_tol * acc_scale + 1e-300;
+  p.tol_r = p.tol_u / std::max(op.A_NN, 1e-300);
+  p.excluded = ending;
+  const LocalSolution s = solve_coulomb_signorini(p);
+  ModeDecision out;
+  out.n_consistent = s.n_consistent;
+  out.phase = s.phase;
+  out.dyn = out.phase == Phase::Free ? phase_dynamics(op, Phase::Free, mu)
+                                     : dynamics_of(op, solve_in_mode(p, out.phase));
+  if (!s.ok()) {
     out.painleve = true;
-    out.phase = Phase::Free;
-    out.dyn = cands[0].dyn;
     out.note =
         fmt::format("no consistent contact mode (b_N = {:.6g}, v_t = {:.6g})", op.b_N, op.c.v_t);
-    return out;
-  }
-  int pick = first_strict;
-  if (n_strict > 1) {
-    // least force: free first, then stick, then slip
-    pick = -1;
-    for (int i = 0; i < n && pick < 0; ++i)
-      if (cands[i].lv == Strict && cands[i].phase == Phase::Free) pick = i;
-    for (int i = 0; i < n && pick < 0; ++i)
-      if (cands[i].lv == Strict && cands[i].phase == Phase::Stick) pick = i;
-    if (pick < 0) pick = first_strict;
+  } else if (s.nonunique()) {
     out.painleve = true;
-    out.note = fmt::format("{} strictly consistent modes; rule: least force ({} kept)", n_strict,
-                           to_string(cands[pick].phase));
-  } else if (n_strict == 0) {
-    pick = first_boundary;  // order of cands: free, slip+, slip-, stick
-    out.note = "boundary case: mode chosen by the order free, slip, stick";
+    out.note = fmt::format("{} strictly consistent modes; rule: least contact effort ({} kept)",
+                           s.n_strict, to_string(s.phase));
+  } else if (s.boundary()) {
+    out.note = "boundary case: mode chosen by the order free, stick, slip";
   }
-  out.phase = cands[pick].phase;
-  out.dyn = cands[pick].dyn;
   return out;
 }
 
 ImpactResult impact_map(const ContactOperators& op, const Vec7& v_minus, const ContactLaw& law) {
+  // The impulse-level Coulomb-Signorini problem (coulomb_signorini.hpp): with
+  // v+ = v- + M^{-1} W P, u = (v_N+ + e_n v_N-, v_t+ + e_t v_t-) = u0 + A P,
+  // u0 = ((1 + e_n) v_N-, (1 + e_t) v_t-). The band is round-off on the velocities.
+  LocalProblem p;
+  p.A_NN = op.A_NN;
+  p.A_NT = op.A_NT;
+  p.A_TT = op.A_TT;
+  p.u_N = (1.0 + law.e_n) * op.c.v_N;
+  p.u_T = (1.0 + law.e_t) * op.c.v_t;
+  p.mu = law.mu;
+  p.tol_u = 1e-13 * (std::abs(p.u_N) + std::abs(p.u_T)) + 1e-300;
+  p.tol_r = p.tol_u / std::max(op.A_NN, 1e-300);
+  const LocalSolution s = solve_coulomb_signorini(p);
   ImpactResult r;
-  const double vN = op.c.v_N, vt = op.c.v_t;
-  // Sticking impulse: A (P_N, P_T) = (-(1 + e_n) v_N, -(1 + e_t) v_t).
-  const double det = op.A_NN * op.A_TT - op.A_NT * op.A_NT;
-  const double rN = -(1.0 + law.e_n) * vN, rT = -(1.0 + law.e_t) * vt;
-  double PN = 0.0, PT = 0.0;
-  bool stick = false;
-  if (law.mu > 0.0 && det > 0.0) {
-    PN = (op.A_TT * rN - op.A_NT * rT) / det;
-    PT = (-op.A_NT * rN + op.A_NN * rT) / det;
-    stick = PN >= 0.0 && std::abs(PT) <= law.mu * PN;
-  }
-  if (!stick) {
-    // Sliding impulse P_T = sigma mu P_N, sigma = direction the sticking impulse wanted
-    // (opposite to the tangential velocity when the stick solution is not available).
-    const double sigma =
-        law.mu == 0.0 ? 0.0
-                      : (det > 0.0 && PT != 0.0 ? (PT > 0 ? 1.0 : -1.0) : (vt > 0 ? -1.0 : 1.0));
-    const double mass = op.A_NN + sigma * law.mu * op.A_NT;
-    if (!(mass > 0.0)) {
-      r.ok = false;
-      return r;
-    }
-    PN = rN / mass;
-    PT = sigma * law.mu * PN;
-  }
-  r.P_N = PN;
-  r.P_T = PT;
-  r.sticking = stick;
-  r.v_plus = v_minus + op.Minv_WN * PN + op.Minv_WT * PT;
+  r.ok = s.ok() && s.phase != Phase::Free;
+  r.nonunique = s.nonunique();
+  if (!r.ok) return r;
+  r.P_N = s.r_N;
+  r.P_T = s.r_T;
+  r.sticking = s.phase == Phase::Stick;
+  r.v_plus = v_minus + op.Minv_WN * r.P_N + op.Minv_WT * r.P_T;
   return r;
 }
 

@@ -7,9 +7,11 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
+#include "rubdyn/contact/coulomb_signorini.hpp"
 #include "rubdyn/core/run_monitor.hpp"
 
 namespace rubdyn {
@@ -36,62 +38,6 @@ bool parse_fixed_step_scheme(std::string_view name, FixedStepScheme& out) {
 }
 
 namespace {
-
-/// The local 2D contact problem of one step, solved exactly by enumeration:
-///   u = u_free + A r,  r = (r_N, r_T), A the 2x2 Delassus matrix,
-///   0 <= u_N  _|_  r_N >= 0,  Coulomb: u_T = 0 and |r_T| <= mu r_N (stick), or
-///   r_T = -mu s r_N with s = sign(u_T) (slip).
-/// Returns the phase (Free, Stick, SlipPos, SlipNeg) and r. When several candidates are
-/// consistent (possible only for a Painleve-type Delassus matrix) the first of free, stick,
-/// slip+, slip- is kept and `ambiguous` is set; when none is (same cause) r = 0 and `ok` false.
-struct LocalSolution {
-  Phase phase = Phase::Free;
-  double r_N = 0.0, r_T = 0.0;
-  bool ok = true, ambiguous = false;
-};
-
-LocalSolution solve_local(double A_NN, double A_NT, double A_TT, double uN, double uT, double mu) {
-  LocalSolution sol;
-  const double scale = std::abs(uN) + std::abs(uT) + 1e-300;
-  const double tol = 1e-13 * scale;  // round-off band on velocities
-  int found = 0;
-  auto take = [&](Phase p, double rN, double rT) {
-    if (found++ == 0) {
-      sol.phase = p;
-      sol.r_N = rN;
-      sol.r_T = rT;
-    } else {
-      sol.ambiguous = true;
-    }
-  };
-  if (uN >= -tol) take(Phase::Free, 0.0, 0.0);
-  if (mu == 0.0) {
-    if (A_NN > 0.0) {
-      const double rN = -uN / A_NN;
-      if (rN > 0.0) take(Phase::SlipPos, rN, 0.0);
-    }
-  } else {
-    const double det = A_NN * A_TT - A_NT * A_NT;
-    if (det > 0.0) {
-      const double rN = -(A_TT * uN - A_NT * uT) / det;
-      const double rT = -(-A_NT * uN + A_NN * uT) / det;
-      if (rN > 0.0 && std::abs(rT) <= mu * rN) take(Phase::Stick, rN, rT);
-    }
-    for (double s : {1.0, -1.0}) {
-      const double m = A_NN - mu * s * A_NT;
-      if (m == 0.0) continue;
-      const double rN = -uN / m;
-      if (!(rN > 0.0)) continue;
-      const double rT = -mu * s * rN;
-      const double uT_after = uT + A_NT * rN + A_TT * rT;
-      if (s * uT_after > tol) take(s > 0 ? Phase::SlipPos : Phase::SlipNeg, rN, rT);
-    }
-  }
-  // "free" found together with a contact candidate whose impulse is ~0 is the boundary case
-  if (found > 1 && sol.phase == Phase::Free) sol.ambiguous = sol.ambiguous && uN > tol;
-  sol.ok = found > 0;
-  return sol;
-}
 
 class FixedStepRunner {
  public:
@@ -373,7 +319,7 @@ bool FixedStepRunner::carpenter_step(double t, bool qn) {
 // the start of the step; Siconos' MoreauJeanOSI re-evaluates them at every Newton iterate, which
 // changes the scheme at O(h), see validation/siconos). Newton's law at
 // velocity level: u_N = v_N(i+1) + e_n v_N(i), u_T = v_t(i+1) + e_t v_t(i), with the 2D Coulomb
-// cone solved exactly (solve_local). Reported forces are impulse / h.
+// cone solved exactly (solve_coulomb_signorini). Reported forces are impulse / h.
 // mj-proj (Acary 2013): after the step, if d_N(q_{i+1}) < 0 the positions are projected back
 // onto d_N = 0 along M^{-1} W_N (mass-weighted metric, default) or along W_N (Euclidean metric,
 // solver.projection = "identity", as Siconos' MLCPProjectOnConstraints); velocities are not
@@ -433,15 +379,26 @@ bool FixedStepRunner::moreau_jean_step(double t, bool project) {
     if (active) {
       const double uN = ci.W_N.dot(vfree) + law_.e_n * ci.v_N;
       const double uT = ci.W_T.dot(vfree) + law_.e_t * ci.v_t;
-      const LocalSolution sol = solve_local(A_NN, A_NT, A_TT, uN, uT, law_.mu);
-      if (!sol.ok) {
+      // The velocity-level Coulomb-Signorini problem (coulomb_signorini.hpp), band: round-off
+      // on the velocities.
+      LocalProblem lp;
+      lp.A_NN = A_NN;
+      lp.A_NT = A_NT;
+      lp.A_TT = A_TT;
+      lp.u_N = uN;
+      lp.u_T = uT;
+      lp.mu = law_.mu;
+      lp.tol_u = 1e-13 * (std::abs(uN) + std::abs(uT)) + 1e-300;
+      lp.tol_r = lp.tol_u / std::max(A_NN, 1e-300);
+      const LocalSolution sol = solve_coulomb_signorini(lp);
+      if (!sol.ok()) {
         fail_ = fmt::format(
             "mj: the contact problem has no solution at t = {:.17g} "
             "(Painleve-type Delassus matrix)",
             t);
         return false;
       }
-      if (sol.ambiguous) ++mj_ambiguous_;
+      if (sol.nonunique()) ++mj_ambiguous_;
       rN = sol.r_N;
       rT = sol.r_T;
       ph = sol.phase;

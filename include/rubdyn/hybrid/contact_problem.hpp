@@ -11,9 +11,10 @@
 // Painleve: the slip normal "mass" A_NN - mu s A_NT <= 0 makes the slip problem ill-posed
 // (no solution, or several): detected and reported, never silently picked.
 //
-// Impact map (v_N- < 0): Newton's law v_N+ = -e_n v_N- with a Coulomb frictional impulse:
-// first the sticking impulse (v_t+ = -e_t v_t-); if it leaves the cone, the sliding impulse
-// P_T = sigma mu P_N in the direction sigma the sticking impulse wanted. Exact for one contact.
+// Mode selection and the impact map are the Coulomb-Signorini problem of
+// rubdyn/contact/coulomb_signorini.hpp at acceleration and impulse level, with its one tie rule.
+// Impact (v_N- < 0): Newton's law v_N+ = -e_n v_N- and v_t+ = -e_t v_t- while the impulse stays
+// in the Coulomb cone, a sliding impulse P_T = -mu s P_N otherwise. Exact for one contact.
 #include <optional>
 #include <string>
 
@@ -55,10 +56,10 @@ struct ModeDecision {
   bool painleve = false;  ///< no candidate (inconsistent) or several (non-unique)
   std::string note;       ///< what was decided and why (logged with the event)
 };
-/// Enumerates the candidates {free, slip+, slip-, stick} (only the sliding direction when
-/// |v_t| > v_t_eps; no stick and no slip direction when mu = 0) and keeps the consistent one;
-/// rel_tol is the relative band within which a margin counts as zero (the accuracy of the
-/// event location). The rules for ties and for no candidate are stated in the implementation.
+/// Solves the acceleration-level contact problem (coulomb_signorini.hpp) for the candidates
+/// {free, stick, slip+, slip-} (only the sliding direction when |v_t| > v_t_eps; no stick and no
+/// slip direction when mu = 0) and keeps the one its tie rule picks; rel_tol is the relative
+/// band within which a margin counts as zero (the accuracy of the event location).
 /// `ending`: the phase a witness has just ended, excluded while another mode is consistent.
 /// force_scale [N]: the contact forces of that phase (0: none); margins within rel_tol of it are
 /// zero.
@@ -69,8 +70,9 @@ ModeDecision select_mode(const ContactOperators& op, double mu, double v_t_eps,
 struct ImpactResult {
   Vec7 v_plus = Vec7::Zero();
   double P_N = 0.0, P_T = 0.0;
-  bool sticking = false;  ///< the impulse stayed inside the cone
-  bool ok = true;         ///< false: ill-posed (normal impact mass <= 0)
+  bool sticking = false;   ///< the impulse stayed inside the cone
+  bool ok = true;          ///< false: no solution (a Painleve-type Delassus matrix)
+  bool nonunique = false;  ///< several solutions (same cause); the tie rule picked one
 };
 /// Impact map at (q, v-) with the contact law of the model. Requires op computed at (q, v-).
 ImpactResult impact_map(const ContactOperators& op, const Vec7& v_minus, const ContactLaw& law);
