@@ -137,6 +137,14 @@ ImpactResult impact_map(const ContactOperators& op, const Vec7& v_minus, const C
   return r;
 }
 
+void project_position(const LagrangianModel& m, Vec7& q, const Vec7& v, double tol) {
+  for (int it = 0; it < 3; ++it) {
+    const ContactKinematics c = m.contact(q, v);
+    if (!c.normal_defined || std::abs(c.d_N) <= tol) return;
+    q -= c.W_N * (c.d_N / c.W_N.squaredNorm());
+  }
+}
+
 void project_velocity(const ContactOperators& op, int n_constraints, Vec7& v) {
   const double gN = op.c.W_N.dot(v);
   if (n_constraints == 1) {

@@ -77,6 +77,11 @@ struct ImpactResult {
 /// Impact map at (q, v-) with the contact law of the model. Requires op computed at (q, v-).
 ImpactResult impact_map(const ContactOperators& op, const Vec7& v_minus, const ContactLaw& law);
 
+/// Puts q on d_N = 0 by steps along W_N (Euclidean metric): q <- q - W_N d_N / |W_N|^2, while
+/// |d_N| > tol (at most 3 steps). For the circular clearance this moves the rotor and stator
+/// centres apart along the normal and is exact in one step; for any model it is a Newton step.
+void project_position(const LagrangianModel& m, Vec7& q, const Vec7& v, double tol);
+
 /// Mass-weighted projection of v onto {v_N = 0} (n_constraints = 1) or {v_N = 0, v_t = 0}
 /// (n_constraints = 2): v <- v - M^{-1} W (W^T M^{-1} W)^{-1} W^T v (W^T v = 0 exactly after).
 void project_velocity(const ContactOperators& op, int n_constraints, Vec7& v);

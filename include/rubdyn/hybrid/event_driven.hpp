@@ -24,23 +24,33 @@
 //            without a chart.
 // The works of the applied loads, the dampers and friction are integrated with the state.
 // Per-phase cost (steps, wall seconds) is measured and reported in the summary.
-// At an event: contact onset with v_N < 0 -> impact map (Newton + Coulomb impulse); any other
-// switch -> the contact problem at acceleration level decides the next phase (select_mode); the
-// phase whose witness fired is not a candidate while another mode is consistent.
+// At an event: contact onset with v_N < 0 -> impact map; any other switch -> the contact problem
+// at acceleration level decides the next phase. Both are the one Coulomb-Signorini solver of
+// contact/coulomb_signorini.hpp (impulse and acceleration level) with its one tie rule; the phase
+// whose witness fired is not a candidate while another mode is consistent.
+// Every event is localised to the last time its witness has the ending phase's sign, to a few
+// ulps, on the interpolant of the step that found it (one localiser for all witnesses).
 // Painleve situations are logged; an inconsistent one ends the run (Termination::Painleve).
 // Impacts accumulating (e_n > 0) are detected by the bounce height falling below the position
 // tolerance; the remaining sequence is truncated by a plastic impact (logged as zeno with the
-// extrapolated accumulation time). A bound on events per simulated second ends chattering runs.
-// Output: dense samples on the output grid (CV_NORMAL interpolation: the output interval never
-// changes the steps), plus samples before and after each event.
+// extrapolated accumulation time). Bounds on events at one instant and per simulated second end
+// runs whose mode switching loops or chatters (Termination::Chattering).
+// Output: dense samples on the output grid (CV_NORMAL interpolation), plus samples before and
+// after each event.
 //
-// What a scene does not need is not built (event_driven.cpp):
-//   - mu = 0: no tangential witness and no stick mode (build_witnesses; select_mode in
-//     contact_problem.cpp has no stick candidate without friction);
-//   - a scene that never closes the gap never builds a contact phase: the free-flight right-hand
-//     side uses only M and f (eval_rhs), contact operators exist only in contact phases;
-//   - e_n = 0 never enters accumulation handling (on_gap_closing: law_.has_restitution());
-//   - output thinning costs no solver work: samples are interpolated (CV_NORMAL), never stepped to;
+// Structure (src/hybrid/): event_driven.cpp is the loop advance -> classify -> dispatch ->
+// restart; phase_system.* holds the phase dynamics (one object and one CVODE session per
+// formulation and mode) and the witnesses; event_locator.hpp the localiser; mode_switching.* the
+// decisions at events (impact map, Zeno truncation, mode selection, gap minima); cvode_session.*
+// is the only file that touches SUNDIALS.
+//
+// What a scene does not need is not built:
+//   - mu = 0: no tangential witness and no stick mode (Integrator::build_witnesses; the contact
+//     problem has no stick candidate without friction);
+//   - a scene that never closes the gap never builds contact quantities: the free-flight
+//     right-hand side uses only M and f (FreeFlight::rhs);
+//   - e_n = 0 never enters accumulation handling (ModeSwitcher::gap_closed);
+//   - output thinning costs no integration: samples are interpolated (CV_NORMAL);
 //   - omega_lim's witness is removed once crossed (main loop).
 #include <functional>
 

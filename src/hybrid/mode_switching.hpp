@@ -1,0 +1,94 @@
+#pragma once
+// Mode switching of the event-driven integrator: what happens at an event, decided on the
+// state at the event, apart from integration (nothing here touches a CVODE session or writes
+// output; the integrator logs the events and restarts where a Transition says).
+//   - contact onset: the impact map (Coulomb-Signorini at impulse level), a bounce or, when the
+//     next bounce would be below the position tolerance, a Zeno truncation by a plastic impact;
+//   - on the constraint: v_N = 0 exactly (and v_t = 0 at the end of a slip), then the contact
+//     problem at acceleration level picks the next mode (select_mode, whose tie rule is that of
+//     contact/coulomb_signorini.hpp);
+//   - gap minima of free flight: clear, touch and go, grazing, or a crossing the root finder
+//     could not see (the gap closed and reopened inside one step);
+//   - the guard against mode switching that loops at one instant or chatters.
+#include <array>
+#include <optional>
+#include <string>
+
+#include "rubdyn/hybrid/contact_problem.hpp"
+
+namespace rubdyn::detail {
+
+struct SwitchTolerances {
+  double v_tol = 0;       ///< velocity below which a closing contact is an arrival, not an impact
+  double graze_tol = 0;   ///< position resolution of the integrator (bounce heights, grazing)
+  double graze_band = 0;  ///< a gap minimum within this band of 0 is logged as grazing
+  double g0 = 1;          ///< the gap's scale (position projections stop at 1e-14 g0)
+};
+
+/// The outcome of an event: what to log and where the run continues.
+struct Transition {
+  bool ok = true;  ///< false: the run ends with `why` and `message`
+  Termination why = Termination::Completed;
+  std::string message;
+  Phase next = Phase::Free;
+  Vec7 q = Vec7::Zero(), v = Vec7::Zero();  ///< the state the next phase starts from
+  std::array<EventRecord, 2> events;        ///< to log, in order
+  int n_events = 0;
+  double impulse_work = 0.0;  ///< kinetic energy change by impulses and velocity projections
+  bool release = false;       ///< free flight starting on the constraint with v_N = 0
+  void log(const EventRecord& e) { events[n_events++] = e; }
+};
+
+class ModeSwitcher {
+ public:
+  ModeSwitcher(const LagrangianModel& m, const SwitchTolerances& tol);
+
+  /// Puts q on d_N = 0 (to 1e-14 g0: 100x below the drift bound we promise, 1e-12 g0, and 1e6x
+  /// above round-off).
+  void project_position(Vec7& q, const Vec7& v) const;
+
+  /// The gap closed at t with (q on d_N = 0, v-). Impact when v_N < -v_tol, then the contact
+  /// problem decides (unless the impact is a bounce). `e` carries the event's time, phase and
+  /// witness.
+  Transition gap_closed(double t, const Vec7& q, const Vec7& v, EventRecord e) const;
+
+  /// On the constraint (q on d_N = 0): v_N set to 0 exactly (v_t too when at_slip_zero or
+  /// |v_t| <= v_tol, with friction), then select_mode with the relative band rel_tol and the
+  /// ending phase excluded (force scale F_ref).
+  Transition on_constraint(double t, const Vec7& q, const Vec7& v, EventRecord e, double rel_tol,
+                           bool at_slip_zero = false, std::optional<Phase> ending = std::nullopt,
+                           double F_ref = 0.0) const;
+
+  enum class GapMinimum {
+    Clear,       ///< above the grazing band: nothing happens
+    TouchAndGo,  ///< within the band, the free normal acceleration >= 0: logged only
+    Grazing,     ///< touching with the gap closing at acceleration level: contact problem
+    Crossed      ///< below 0: the gap closed and reopened inside the step
+  };
+  GapMinimum classify_gap_minimum(double t, const Vec7& q, const Vec7& v) const;
+  /// The grazing event record of a gap minimum (TouchAndGo: phase_after Free and its note).
+  EventRecord grazing_record(double t, const Vec7& q, const Vec7& v, bool touch_and_go) const;
+
+ private:
+  const LagrangianModel& m_;
+  const ContactLaw law_;
+  const SwitchTolerances tol_;
+};
+
+/// Bounds on events: more than 20 at one instant (mode switching that loops) or more than
+/// max_per_second per unit of simulated time over the last 64 (chattering) end the run.
+class EventGuard {
+ public:
+  explicit EventGuard(double max_per_second) : max_per_second_(max_per_second) {}
+  /// Registers an event at t; returns the reason to stop, or nullopt.
+  std::optional<std::string> record(double t);
+
+ private:
+  double max_per_second_;
+  std::array<double, 64> times_{};
+  long n_ = 0;
+  int same_time_ = 0;
+  double last_t_ = -1e300;
+};
+
+}  // namespace rubdyn::detail

@@ -1,0 +1,168 @@
+#pragma once
+// Phase dynamics of the event-driven integrator: one object per formulation and mode, each with
+// its own CVODE session (cvode_session.hpp, the only place that touches SUNDIALS) and its own
+// right-hand side, so that no right-hand side branches on the phase or the formulation:
+//   FreeFlight        free flight in (q, v): a = M^{-1} f (one structured solve), analytic
+//                     Jacobian; Adams (fixed-point) or BDF
+//   ProjectedContact  slip+-/stick as the index-reduced DAE in (q, v): BDF, CVODE's projection
+//                     after every step (positions onto d_N = 0, velocities onto v_N = 0 and
+//                     v_t = 0 in stick, mass-weighted)
+//   ReducedContact    slip (phi free) or stick (phi tied to theta) in the model's chart
+//                     (contact_chart.hpp): the constraints hold by construction
+// A session state is the mechanical part (n() components: (q, v) or (p, p')) followed by the
+// kNw works of the applied loads, the dampers and friction, integrated with the state and
+// error-controlled like it (as CVODES quadratures they cost a second Nordsieck array: measured
+// 30 % of the run time in the rolling regime).
+// The witnesses of the running phase are evaluated here, on the phase's own state.
+#include <array>
+#include <memory>
+#include <vector>
+
+#include "cvode_session.hpp"
+#include "rubdyn/contact/contact_chart.hpp"
+#include "rubdyn/hybrid/contact_problem.hpp"
+
+namespace rubdyn::detail {
+
+constexpr int kN = 2 * kNumDofs;  // full state y = (q, v)
+constexpr int kNw = 3;            // works: applied loads, dampers, friction
+constexpr int kNy = kN + kNw;     // largest session state
+using SessionState = std::array<double, kNy>;
+using Works = std::array<double, kNw>;
+
+/// What ends a phase (event_driven.hpp lists them per phase).
+enum class Witness { Gap, GapRate, NormalForce, SlipSpeed, ConeUpper, ConeLower, Omega };
+const char* witness_name(Witness w);
+
+/// The witnesses of the running phase, their directions and scales. Owned by the integrator,
+/// read by the root function of every session.
+struct WitnessSet {
+  std::vector<Witness> list;
+  std::vector<int> dirs;
+  double g0 = 1.0, v_ref = 1.0, F_ref = 1.0, omega_lim = 0.0;
+  void clear() {
+    list.clear();
+    dirs.clear();
+  }
+  void add(Witness w, int dir) {
+    list.push_back(w);
+    dirs.push_back(dir);
+  }
+  int size() const { return static_cast<int>(list.size()); }
+};
+
+/// Tolerances and limits shared by the sessions.
+struct SessionSettings {
+  double rtol = 1e-10;
+  double atol_q = 1e-12;  ///< positions [m]
+  double atol_v = 1e-9;   ///< velocities [m/s]
+  double g0 = 1.0;        ///< the gap's scale [m]
+  bool adams = true;      ///< Adams (else BDF); ProjectedContact is always BDF
+  bool fixed_point = true;
+  long max_steps = 10'000'000;
+};
+
+class PhaseSystem {
+ public:
+  PhaseSystem(const LagrangianModel& m, const WitnessSet& w);
+  virtual ~PhaseSystem();
+  PhaseSystem(const PhaseSystem&) = delete;
+  PhaseSystem& operator=(const PhaseSystem&) = delete;
+
+  /// Maps the full state (q, v) of `phase` into the session state; (q, v) becomes the state
+  /// the session will start from (an embedding: equal to the input to round-off).
+  void enter(Phase phase, Vec7& q, Vec7& v);
+  /// (Re)starts the session at t from the entered state with the works w and the witnesses.
+  void restart(double t, const Works& w, double t_stop);
+  /// Advances the session (CvodeSession::advance) and returns the full state at t.
+  CvodeSession::Status advance(double tout, double& t, Vec7& q, Vec7& v, bool one_step);
+
+  Phase phase() const { return phase_; }
+  CvodeSession& session() { return *session_; }
+  const CvodeSession& session() const { return *session_; }
+  /// Start of the last internal step (the interpolant covers [step_start, current_time]).
+  double step_start() const { return session_->current_time() - session_->last_step(); }
+
+  /// The full state interpolated at t inside the last step.
+  void interpolate(double t, Vec7& q, Vec7& v) const;
+  /// Works at the last state returned by advance, or interpolated at t in the last step.
+  Works works() const;
+  Works works_at(double t) const;
+
+  /// Contact operators of a contact phase at a full state of it. The DAE formulation first
+  /// projects the state onto the constraints (its interpolant between step ends is not
+  /// projected); the others are on them by construction.
+  virtual void contact_point(double t, Vec7& q, Vec7& v, ContactOperators& op) const;
+  /// Contact forces of the phase at a full state of it (0 in free flight).
+  void forces(double t, Vec7 q, Vec7 v, double& F_N, double& F_T) const;
+  /// Value (unscaled) of a contact witness at a full state of the phase.
+  double witness_value(Witness w, double t, Vec7 q, Vec7 v) const;
+
+ protected:
+  virtual int n() const = 0;
+  virtual void to_full(const double* ys, Vec7& q, Vec7& v) const = 0;
+  virtual void chart_in(const Vec7& q, const Vec7& v, Vec7& q0, Vec7& v0) = 0;
+  virtual bool projection() const { return false; }
+  /// Creates the session: n mechanical components, then the works.
+  void open(int n, CvodeMethod method, const SessionSettings& s, const ChartScales& scales,
+            const CvodeCallbacks& cb);
+  /// Rates of the works: applied loads, dampers, friction (friction power given).
+  void powers(double t, const Vec7& q, const Vec7& v, double friction, double* w) const;
+
+  const LagrangianModel& m_;
+  const ContactLaw law_;
+  const WitnessSet& wit_;
+  Phase phase_ = Phase::Free;
+  SessionState ys_{};  ///< the session's state
+
+ private:
+  static int roots(double t, const double* y, double* g, void* user);
+  std::unique_ptr<CvodeSession> session_;
+  SessionState rtol_{}, atol_{};
+};
+
+class FreeFlight final : public PhaseSystem {
+ public:
+  FreeFlight(const LagrangianModel& m, const WitnessSet& w, const SessionSettings& s);
+
+ private:
+  int n() const override { return kN; }
+  void to_full(const double* ys, Vec7& q, Vec7& v) const override;
+  void chart_in(const Vec7& q, const Vec7& v, Vec7& q0, Vec7& v0) override;
+  static int rhs(double t, const double* y, double* yd, void* user);
+  static int jac(double t, const double* y, const double* yd, double* J, void* user);
+};
+
+class ProjectedContact final : public PhaseSystem {
+ public:
+  ProjectedContact(const LagrangianModel& m, const WitnessSet& w, const SessionSettings& s);
+  void contact_point(double t, Vec7& q, Vec7& v, ContactOperators& op) const override;
+
+ private:
+  int n() const override { return kN; }
+  void to_full(const double* ys, Vec7& q, Vec7& v) const override;
+  void chart_in(const Vec7& q, const Vec7& v, Vec7& q0, Vec7& v0) override;
+  bool projection() const override { return true; }
+  static int rhs(double t, const double* y, double* yd, void* user);
+  static int proj(double t, const double* y, double* corr, void* user);
+  double g0_;
+};
+
+class ReducedContact final : public PhaseSystem {
+ public:
+  ReducedContact(const LagrangianModel& m, const WitnessSet& w, const SessionSettings& s,
+                 const ContactChart& chart, ChartMode mode);
+
+ private:
+  int n() const override { return 2 * dim_; }
+  void to_full(const double* ys, Vec7& q, Vec7& v) const override;
+  void chart_in(const Vec7& q, const Vec7& v, Vec7& q0, Vec7& v0) override;
+  void unpack(const double* ys, Vec7& p, Vec7& pd) const;
+  static int rhs(double t, const double* y, double* yd, void* user);
+  const ContactChart& chart_;
+  const ChartMode mode_;
+  const int dim_;
+  Vec7 anchor_ = Vec7::Zero();
+};
+
+}  // namespace rubdyn::detail
