@@ -88,10 +88,16 @@ class Integrator {
     wit_.clear();
     switch (phase_) {
       case Phase::Free:
+        // After a release on the constraint (lift-off, v_N = 0 and F_N ~ 0, so d_N'' ~ 0 too)
+        // the gap and its rate start at degenerate zeros. The gap opens as 0.5 d_N'' t^2, far
+        // below the position tolerance for many steps, and the integrator's own error (atol on
+        // coordinates whose difference is d_N) can cross d_N back through 0: a contact onset
+        // that is an artefact, followed by the same release, in a loop. Until the gap has
+        // opened beyond the position tolerance, contact onset is d_N = -graze_tol (a
+        // penetration the integrator can resolve); the gap-rate witness waits until v_N is
+        // above the velocity tolerance (arm).
+        wit_.gap_offset = gap_banded_ ? graze_tol_ : 0.0;
         wit_.add(Witness::Gap, -1);
-        // After a release on the constraint (lift-off, v_N = 0 and F_N = 0, so d_N'' = 0 too)
-        // the gap rate starts at a degenerate zero that round-off may cross back and forth:
-        // the gap-minimum witness is armed after the first step (arm_gap_rate).
         if (!gap_rate_deferred_) wit_.add(Witness::GapRate, +1);
         break;
       case Phase::SlipPos:
@@ -133,12 +139,17 @@ class Integrator {
     s->restart(t, work_, t_end_);
   }
 
-  /// A free phase after a release: the gap-minimum witness is armed once the gap is clearly
-  /// opening (v_N above the velocity tolerance); until then a closing gap is still seen by the
-  /// d_N witness, and only a touch-and-go without any crossing could pass unlogged.
-  void arm_gap_rate(const Vec7& q, const Vec7& v) {
-    if (m_.contact(q, v).v_N <= v_tol_) return;
-    gap_rate_deferred_ = false;
+  /// A free phase after a release (build_witnesses): the gap-minimum witness is armed once the
+  /// gap is clearly opening (v_N above the velocity tolerance; until then a closing gap is still
+  /// seen by the d_N witness, and only a touch-and-go without any crossing could pass unlogged),
+  /// contact onset at d_N = 0 once the gap is above the position tolerance.
+  void arm(const Vec7& q, const Vec7& v) {
+    const ContactKinematics c = m_.contact(q, v);
+    const bool rate = gap_rate_deferred_ && c.v_N > v_tol_;
+    const bool gap = gap_banded_ && c.d_N > graze_tol_;
+    if (!rate && !gap) return;
+    gap_rate_deferred_ = gap_rate_deferred_ && !rate;
+    gap_banded_ = gap_banded_ && !gap;
     build_witnesses();
     cur_->session().set_roots(wit_.size(), wit_.dirs.data());
   }
@@ -207,7 +218,7 @@ class Integrator {
       return false;
     }
     phase_ = tr.next;
-    gap_rate_deferred_ = tr.release;
+    gap_rate_deferred_ = gap_banded_ = tr.release;
     start_phase(t, tr.q, tr.v);
     emit_sample(t, q_restart_, v_restart_);
     return guard(t);
@@ -357,7 +368,8 @@ class Integrator {
   PhaseSystem* cur_ = nullptr;
   Phase phase_ = Phase::Free;
   bool omega_pending_ = false;
-  bool gap_rate_deferred_ = false;
+  bool gap_rate_deferred_ = false;  // free flight after a release: gap-rate witness not armed
+  bool gap_banded_ = false;         // ... and contact onset at d_N = -graze_tol
   double t_end_ = 0, phase_start_ = 0, t_restart_ = 0;
   Vec7 q_restart_ = Vec7::Zero(), v_restart_ = Vec7::Zero();
   double t_init_ = 0, next_out_ = 0;  // output grid t_init_ + k output_dt, next time to write
@@ -405,7 +417,7 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
     while (ok && t < t_end_) {
       // advance (per-phase cost: steps and wall time of the integration itself)
       const double tout = std::min(next_out_, t_end_);
-      const bool arming = gap_rate_deferred_;
+      const bool arming = gap_rate_deferred_ || gap_banded_;
       const int ph = static_cast<int>(phase_);
       const long steps0 = cur_->session().steps_since_restart();
       const auto wall_adv = std::chrono::steady_clock::now();
@@ -437,7 +449,7 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
         fail(Termination::NonFinite, fmt::format("non-finite state at t = {:.17g}", t));
         break;
       }
-      if (arming && st != Status::Root) arm_gap_rate(q, v);
+      if (arming && st != Status::Root) arm(q, v);
       if (st != Status::Root) root_without_restart = false;
       if (st == Status::Step) continue;
       if (st == Status::Reached) {

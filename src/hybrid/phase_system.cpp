@@ -121,7 +121,7 @@ void PhaseSystem::forces(double t, Vec7 q, Vec7 v, double& F_N, double& F_T) con
 }
 
 double PhaseSystem::witness_value(Witness w, double t, Vec7 q, Vec7 v) const {
-  if (w == Witness::Gap) return m_.contact(q, v).d_N;
+  if (w == Witness::Gap) return m_.contact(q, v).d_N + wit_.gap_offset;
   if (w == Witness::GapRate) return m_.contact(q, v).v_N;
   ContactOperators op;
   contact_point(t, q, v, op);
@@ -157,7 +157,7 @@ int PhaseSystem::roots(double t, const double* y, double* g, void* user) {
   const double mu = self->law_.mu;
   for (int k = 0; k < ws.size(); ++k) {
     switch (ws.list[k]) {
-      case Witness::Gap: g[k] = self->m_.contact(q, v).d_N / ws.g0; break;
+      case Witness::Gap: g[k] = (self->m_.contact(q, v).d_N + ws.gap_offset) / ws.g0; break;
       case Witness::GapRate: g[k] = self->m_.contact(q, v).v_N / ws.v_ref; break;
       case Witness::NormalForce: g[k] = dyn.F_N / ws.F_ref; break;
       case Witness::ConeUpper: g[k] = (mu * dyn.F_N - dyn.F_T) / ws.F_ref; break;

@@ -40,6 +40,7 @@ struct WitnessSet {
   std::vector<Witness> list;
   std::vector<int> dirs;
   double g0 = 1.0, v_ref = 1.0, F_ref = 1.0, omega_lim = 0.0;
+  double gap_offset = 0.0;  ///< the Gap witness is d_N + gap_offset (after a release)
   void clear() {
     list.clear();
     dirs.clear();
