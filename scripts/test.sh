@@ -15,7 +15,7 @@ if [ "${1:-}" = "--sanitize" ]; then
 fi
 
 bash scripts/install-deps.sh
-cmake -S . -B "$build" "${flags[@]}" -DRUBDYN_TEST_ONLY= > /dev/null
+cmake -S . -B "$build" "${flags[@]}" -DRUBDYN_TEST_ONLY= -DRUBDYN_WARNINGS_AS_ERRORS=ON > /dev/null
 cmake --build "$build" -j2
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
