@@ -52,7 +52,7 @@ class Integrator {
     wit_.g0 = g0_;
     wit_.v_ref = std::max(1e3 * g0_, 1e-300);
     wit_.omega_lim = opt.omega_lim;
-    omega_pending_ = opt.omega_lim > 0.0;
+    omega_pending_ = opt.omega_lim > 0.0 && m.spin_coordinate() >= 0;
     if (opt.contact_phases == ContactFormulation::Reduced) chart_ = m.contact_chart();
   }
 
@@ -183,7 +183,7 @@ class Integrator {
     s.v_N = c.v_N;
     s.v_t = c.v_t;
     s.phase = phase_;
-    mon_.observe(t, s.v[TH], s.d_N, s.v_N, s.F_N, s.F_T, phase_ != Phase::Free);
+    mon_.observe(t, m_.spin(s.v), s.d_N, s.v_N, s.F_N, s.F_T, phase_ != Phase::Free);
     sink_.sample(s);
   }
 
@@ -455,7 +455,7 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
       if (st == Status::Reached) {
         emit_sample(t, q, v);
         if (opt_.progress)
-          opt_.progress(t, std::accumulate(sum_.events.begin(), sum_.events.end(), 0L), v[TH],
+          opt_.progress(t, std::accumulate(sum_.events.begin(), sum_.events.end(), 0L), m_.spin(v),
                         phase_);
         if (t >= tout && tout == next_out_)
           next_out_ = t_init_ + static_cast<double>(++k_out_) * opt_.output_dt;
@@ -525,6 +525,10 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
 
 RunSummary run_event_driven(const LagrangianModel& model, const MechanicalState& initial,
                             double t_end, const EventDrivenOptions& opt, OutputSink& sink) {
+  if (model.contact_count() != 1)
+    throw std::invalid_argument(
+        fmt::format("the event-driven solver handles one contact; model '{}' has {}", model.name(),
+                    model.contact_count()));
   Integrator integ(model, opt, sink);
   return integ.run(initial, t_end);
 }

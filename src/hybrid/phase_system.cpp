@@ -163,7 +163,7 @@ int PhaseSystem::roots(double t, const double* y, double* g, void* user) {
       case Witness::ConeUpper: g[k] = (mu * dyn.F_N - dyn.F_T) / ws.F_ref; break;
       case Witness::ConeLower: g[k] = (mu * dyn.F_N + dyn.F_T) / ws.F_ref; break;
       case Witness::SlipSpeed: g[k] = op.c.v_t / ws.v_ref; break;
-      case Witness::Omega: g[k] = (v[TH] - ws.omega_lim) / ws.omega_lim; break;
+      case Witness::Omega: g[k] = (self->m_.spin(v) - ws.omega_lim) / ws.omega_lim; break;
     }
   }
   return 0;

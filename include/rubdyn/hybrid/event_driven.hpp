@@ -92,7 +92,9 @@ struct EventDrivenOptions {
 
 /// Integrates from `initial` to t_end; hands samples, events and the summary to `sink`.
 /// Never throws from inside the time loop: numerical trouble ends the run with a typed
-/// termination, a message, and everything produced so far.
+/// termination, a message, and everything produced so far. Throws std::invalid_argument for a
+/// model with contact_count() != 1. omega (monitor, omega_lim) is the rate of the model's
+/// spin_coordinate(); a model without one has no omega_lim witness.
 RunSummary run_event_driven(const LagrangianModel& model, const MechanicalState& initial,
                             double t_end, const EventDrivenOptions& opt, OutputSink& sink);
 

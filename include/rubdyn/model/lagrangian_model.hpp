@@ -67,6 +67,18 @@ class LagrangianModel {
   /// Minimal coordinates of the contact phases, or nullptr when the model has none (the
   /// event-driven integrator then integrates contact phases as a DAE with projection).
   virtual const ContactChart* contact_chart() const { return nullptr; }
+  /// The coordinate whose rate is the monitored spin speed omega (the run monitor, omega_max,
+  /// the crossing of omega_lim; Carpenter's free-spin column), or -1 when the model has none.
+  /// The solvers never name a coordinate themselves.
+  virtual int spin_coordinate() const { return -1; }
+  /// omega at a state (0 without a spin coordinate).
+  double spin(const Vec7& v) const {
+    const int i = spin_coordinate();
+    return i >= 0 ? v[i] : 0.0;
+  }
+  /// Number of unilateral contacts. The solvers handle one (the circular clearance); a model
+  /// with more is rejected by them, not silently reduced.
+  virtual int contact_count() const { return 1; }
 };
 
 }  // namespace rubdyn

@@ -71,6 +71,7 @@ class RotorStatorModel final : public LagrangianModel {
   const ContactLaw& contact_law() const override { return p_.contact; }
   void solve_mass(const Vec7& q, Mat7x3& B, int ncols) const override;
   const ContactChart* contact_chart() const override { return &chart_; }
+  int spin_coordinate() const override { return TH; }
 
   /// Power of the bearing dampers -c_b |v_b|^2 and of the stator dampers -c_s |v_s|^2 [W].
   double bearing_damping_power(const Vec7& v) const;
