@@ -5,6 +5,20 @@
 
 namespace rubdyn {
 
+LocalProblem make_local_problem(double A_NN, double A_NT, double A_TT, double u_N, double u_T,
+                                double mu, double rel_band) {
+  LocalProblem p;
+  p.A_NN = A_NN;
+  p.A_NT = A_NT;
+  p.A_TT = A_TT;
+  p.u_N = u_N;
+  p.u_T = u_T;
+  p.mu = mu;
+  p.tol_u = rel_band * (std::abs(u_N) + std::abs(u_T)) + 1e-300;
+  p.tol_r = p.tol_u / std::max(A_NN, 1e-300);
+  return p;
+}
+
 ModeSolution solve_in_mode(const LocalProblem& p, Phase mode) {
   ModeSolution m;
   switch (mode) {

@@ -47,14 +47,7 @@ namespace {
 
 /// The acceleration-level problem at a contact point: u0 = (b_N, b_T), r = (F_N, F_T).
 LocalProblem acceleration_problem(const ContactOperators& op, double mu) {
-  LocalProblem p;
-  p.A_NN = op.A_NN;
-  p.A_NT = op.A_NT;
-  p.A_TT = op.A_TT;
-  p.u_N = op.b_N;
-  p.u_T = op.b_T;
-  p.mu = mu;
-  return p;
+  return make_local_problem(op.A_NN, op.A_NT, op.A_TT, op.b_N, op.b_T, mu);
 }
 
 PhaseDynamics dynamics_of(const ContactOperators& op, const ModeSolution& m) {
@@ -116,15 +109,8 @@ ImpactResult impact_map(const ContactOperators& op, const Vec7& v_minus, const C
   // The impulse-level Coulomb-Signorini problem (coulomb_signorini.hpp): with
   // v+ = v- + M^{-1} W P, u = (v_N+ + e_n v_N-, v_t+ + e_t v_t-) = u0 + A P,
   // u0 = ((1 + e_n) v_N-, (1 + e_t) v_t-). The band is round-off on the velocities.
-  LocalProblem p;
-  p.A_NN = op.A_NN;
-  p.A_NT = op.A_NT;
-  p.A_TT = op.A_TT;
-  p.u_N = (1.0 + law.e_n) * op.c.v_N;
-  p.u_T = (1.0 + law.e_t) * op.c.v_t;
-  p.mu = law.mu;
-  p.tol_u = 1e-13 * (std::abs(p.u_N) + std::abs(p.u_T)) + 1e-300;
-  p.tol_r = p.tol_u / std::max(op.A_NN, 1e-300);
+  const LocalProblem p = make_local_problem(op.A_NN, op.A_NT, op.A_TT, (1.0 + law.e_n) * op.c.v_N,
+                                            (1.0 + law.e_t) * op.c.v_t, law.mu);
   const LocalSolution s = solve_coulomb_signorini(p);
   ImpactResult r;
   r.ok = s.ok() && s.phase != Phase::Free;

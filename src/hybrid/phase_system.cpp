@@ -69,6 +69,16 @@ void PhaseSystem::open(int n, CvodeMethod method, const SessionSettings& s,
   session_ = std::make_unique<CvodeSession>(c, cbw);
 }
 
+void PhaseSystem::to_full(const double* ys, Vec7& q, Vec7& v) const {
+  split(ys, q, v);
+}
+
+void PhaseSystem::chart_in(const Vec7& q, const Vec7& v, Vec7& q0, Vec7& v0) {
+  join(q, v, ys_.data());
+  q0 = q;
+  v0 = v;
+}
+
 void PhaseSystem::enter(Phase phase, Vec7& q, Vec7& v) {
   phase_ = phase;
   const Vec7 q_in = q, v_in = v;
@@ -179,16 +189,6 @@ FreeFlight::FreeFlight(const LagrangianModel& m, const WitnessSet& w, const Sess
   open(kN, s.adams ? CvodeMethod::Adams : CvodeMethod::BDF, s, ChartScales{}, cb);
 }
 
-void FreeFlight::to_full(const double* ys, Vec7& q, Vec7& v) const {
-  split(ys, q, v);
-}
-
-void FreeFlight::chart_in(const Vec7& q, const Vec7& v, Vec7& q0, Vec7& v0) {
-  join(q, v, ys_.data());
-  q0 = q;
-  v0 = v;
-}
-
 int FreeFlight::rhs(double t, const double* y, double* yd, void* user) {
   // Free flight needs only M and f: no contact quantities are built here.
   const auto* self = static_cast<const FreeFlight*>(static_cast<PhaseSystem*>(user));
@@ -235,16 +235,6 @@ ProjectedContact::ProjectedContact(const LagrangianModel& m, const WitnessSet& w
   cb.rhs = &ProjectedContact::rhs;
   cb.proj = &ProjectedContact::proj;
   open(kN, CvodeMethod::BDF, s, ChartScales{}, cb);
-}
-
-void ProjectedContact::to_full(const double* ys, Vec7& q, Vec7& v) const {
-  split(ys, q, v);
-}
-
-void ProjectedContact::chart_in(const Vec7& q, const Vec7& v, Vec7& q0, Vec7& v0) {
-  join(q, v, ys_.data());
-  q0 = q;
-  v0 = v;
 }
 
 /// Projects a state of the phase onto the constraints (positions onto d_N = 0, velocities

@@ -100,9 +100,10 @@ class PhaseSystem {
   double witness_value(Witness w, double t, Vec7 q, Vec7 v) const;
 
  protected:
-  virtual int n() const = 0;
-  virtual void to_full(const double* ys, Vec7& q, Vec7& v) const = 0;
-  virtual void chart_in(const Vec7& q, const Vec7& v, Vec7& q0, Vec7& v0) = 0;
+  /// Session state layout; the defaults are the full coordinates (q, v).
+  virtual int n() const { return kN; }
+  virtual void to_full(const double* ys, Vec7& q, Vec7& v) const;
+  virtual void chart_in(const Vec7& q, const Vec7& v, Vec7& q0, Vec7& v0);
   virtual bool projection() const { return false; }
   /// Creates the session: n mechanical components, then the works.
   void open(int n, CvodeMethod method, const SessionSettings& s, const ChartScales& scales,
@@ -127,9 +128,6 @@ class FreeFlight final : public PhaseSystem {
   FreeFlight(const LagrangianModel& m, const WitnessSet& w, const SessionSettings& s);
 
  private:
-  int n() const override { return kN; }
-  void to_full(const double* ys, Vec7& q, Vec7& v) const override;
-  void chart_in(const Vec7& q, const Vec7& v, Vec7& q0, Vec7& v0) override;
   static int rhs(double t, const double* y, double* yd, void* user);
   static int jac(double t, const double* y, const double* yd, double* J, void* user);
 };
@@ -140,9 +138,6 @@ class ProjectedContact final : public PhaseSystem {
   void contact_point(double t, Vec7& q, Vec7& v, ContactOperators& op) const override;
 
  private:
-  int n() const override { return kN; }
-  void to_full(const double* ys, Vec7& q, Vec7& v) const override;
-  void chart_in(const Vec7& q, const Vec7& v, Vec7& q0, Vec7& v0) override;
   bool projection() const override { return true; }
   static int rhs(double t, const double* y, double* yd, void* user);
   static int proj(double t, const double* y, double* corr, void* user);

@@ -381,15 +381,7 @@ bool FixedStepRunner::moreau_jean_step(double t, bool project) {
       const double uT = ci.W_T.dot(vfree) + law_.e_t * ci.v_t;
       // The velocity-level Coulomb-Signorini problem (coulomb_signorini.hpp), band: round-off
       // on the velocities.
-      LocalProblem lp;
-      lp.A_NN = A_NN;
-      lp.A_NT = A_NT;
-      lp.A_TT = A_TT;
-      lp.u_N = uN;
-      lp.u_T = uT;
-      lp.mu = law_.mu;
-      lp.tol_u = 1e-13 * (std::abs(uN) + std::abs(uT)) + 1e-300;
-      lp.tol_r = lp.tol_u / std::max(A_NN, 1e-300);
+      const LocalProblem lp = make_local_problem(A_NN, A_NT, A_TT, uN, uT, law_.mu);
       const LocalSolution sol = solve_coulomb_signorini(lp);
       if (!sol.ok()) {
         fail_ = fmt::format(

@@ -11,18 +11,9 @@ using namespace rubdyn;
 
 namespace {
 
+/// A problem with data of order 1 and the round-off band.
 LocalProblem problem(double A_NN, double A_NT, double A_TT, double u_N, double u_T, double mu) {
-  LocalProblem p;
-  p.A_NN = A_NN;
-  p.A_NT = A_NT;
-  p.A_TT = A_TT;
-  p.u_N = u_N;
-  p.u_T = u_T;
-  p.mu = mu;
-  // round-off band on data of order 1
-  p.tol_u = 1e-13 * (std::abs(u_N) + std::abs(u_T));
-  p.tol_r = p.tol_u / A_NN;
-  return p;
+  return make_local_problem(A_NN, A_NT, A_TT, u_N, u_T, mu);
 }
 
 /// Checks the law from its definition: u = u0 + A r; 0 <= u_N _|_ r_N >= 0; |r_T| <= mu r_N;

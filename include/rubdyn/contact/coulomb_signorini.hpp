@@ -50,6 +50,11 @@ struct LocalProblem {
   std::optional<Phase> excluded;  ///< tie rule 1
 };
 
+/// The problem (A, u0, mu) with the band of round-off on data of velocity or impulse level:
+/// tol_u = rel_band (|u_N| + |u_T|), tol_r = tol_u / A_NN (the impact map, Moreau-Jean).
+LocalProblem make_local_problem(double A_NN, double A_NT, double A_TT, double u_N, double u_T,
+                                double mu, double rel_band = 1e-13);
+
 enum class Consistency : int { Violated = 0, Boundary = 1, Strict = 2 };
 
 /// r and the normal "mass" of the problem in one mode (no consistency check).
