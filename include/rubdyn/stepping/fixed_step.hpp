@@ -1,12 +1,14 @@
 #pragma once
 // Fixed-step validation schemes on the same model and contact law as the event-driven integrator
-// (paper, section 4.2-4.3, Table 1; the decisions it leaves open are stated in fixed_step.cpp
-// where they are taken):
+// (paper, section 4.2-4.3, Table 1):
 //   carp-onevc  Carpenter, Algorithm 1 (central differences, one verification/correction)
 //   carp-qn     Carpenter inside a quasi-Newton loop (Roques et al., JSV 329, 2010)
 //   mj          Moreau-Jean theta-method, velocity-level Signorini + Coulomb cone, Newton impact
-//   law mj-proj     projected Moreau-Jean (Acary, CMAME 256, 2013): positions projected onto d_N >=
-//   0
+//               law
+//   mj-proj     projected Moreau-Jean (Acary, CMAME 256, 2013): positions projected onto
+//               d_N >= 0
+// Each scheme is a Stepper (stepper.hpp; carpenter.cpp, moreau_jean.cpp state the decisions the
+// paper leaves open where they are taken); run_fixed_step is their one run loop.
 #include <string_view>
 
 #include "rubdyn/core/run_types.hpp"
@@ -32,12 +34,13 @@ struct FixedStepOptions {
   bool project_with_mass = true;
   int output_every = 0;  ///< write every N-th step (0: use output_dt)
   double output_dt = 1e-4;
-  double omega_lim = 0.0;  ///< for the summary: first time v[TH] >= omega_lim
+  double omega_lim = 0.0;  ///< for the summary: first time omega (the model's spin) >= it
 };
 
 /// Runs a scheme from `initial` to t_end, handing samples, events and the summary to `sink`.
-/// Numerical trouble (Newton failure, non-finite state) ends the run with a typed termination;
-/// nothing is thrown from inside the time loop.
+/// Numerical trouble (Newton failure, non-finite state, Painleve) ends the run with a typed
+/// termination; nothing is thrown from inside the time loop. Throws std::invalid_argument for a
+/// bad h or a model with other than one contact (make_stepper), before any output.
 RunSummary run_fixed_step(const LagrangianModel& model, const MechanicalState& initial,
                           double t_end, const FixedStepOptions& opt, OutputSink& sink);
 
