@@ -68,7 +68,7 @@ class Integrator {
     s.g0 = g0_;
     s.adams = opt_.adams;
     s.fixed_point = opt_.fixed_point;
-    s.max_steps = opt_.max_steps_per_phase;
+    s.max_steps = opt_.max_steps_per_call;
     free_ = std::make_unique<FreeFlight>(m_, wit_, s);
     s.adams = opt_.contact_adams;
     if (chart_ == nullptr) {
@@ -298,10 +298,7 @@ class Integrator {
     e.d_N = c.d_N;
     e.v_N_minus = c.v_N;
     e.v_t_minus = c.v_t;
-    e.witness = witness_name(w);
-    e.kind = w == Witness::NormalForce ? EventKind::Liftoff
-                                       : (w == Witness::SlipSpeed ? EventKind::Stick  // refined
-                                                                  : EventKind::Slip);
+    e.witness = witness_name(w);  // the kind follows from the decision (on_constraint)
     // Decided with a band of 1e-7 relative: the witness is zero at the event to the accuracy
     // of the root location on the interpolant, so a margin of that size is a zero, not a sign.
     // The phase whose witness fired cannot continue (tie rule 1 of coulomb_signorini.hpp).

@@ -105,6 +105,14 @@ Transition ModeSwitcher::on_constraint(double t, const Vec7& q_in, const Vec7& v
   e.v_N_plus = op.c.v_N;
   e.v_t_plus = op.c.v_t;
   e.phase_after = d.phase;
+  if (ending) {
+    // a contact phase ended by its witness: the kind is what the contact problem decided
+    const bool slip_before = *ending == Phase::SlipPos || *ending == Phase::SlipNeg;
+    e.kind = d.phase == Phase::Free              ? EventKind::Liftoff
+             : d.phase == Phase::Stick           ? EventKind::Stick
+             : slip_before && d.phase != *ending ? EventKind::Reversal
+                                                 : EventKind::Slip;
+  }
   e.F_N = d.dyn.F_N;
   e.F_T = d.dyn.F_T;
   if (!d.note.empty()) e.note += (e.note.empty() ? "" : "; ") + d.note;

@@ -54,7 +54,8 @@ class ModeSwitcher {
 
   /// On the constraint (q on d_N = 0): v_N set to 0 exactly (v_t too when at_slip_zero or
   /// |v_t| <= v_tol, with friction), then select_mode with the relative band rel_tol and the
-  /// ending phase excluded (force scale F_ref).
+  /// ending phase excluded (force scale F_ref). With `ending`, the event's kind is set from the
+  /// decision: liftoff, stick, slip (stick -> slip) or reversal (slip -> the other slip).
   Transition on_constraint(double t, const Vec7& q, const Vec7& v, EventRecord e, double rel_tol,
                            bool at_slip_zero = false, std::optional<Phase> ending = std::nullopt,
                            double F_ref = 0.0) const;

@@ -30,7 +30,8 @@ enum class ChartMode : int { Slip = 0, Stick = 1 };
 /// A coordinate with length 0 is weighted like the full coordinate it copies (rtol |p_i| + atol).
 /// A coordinate with length L > 0 is an angle that moves the contact point by L per radian: its
 /// error is weighted as the displacement it causes, absolutely, at the scale of the gap:
-/// (rtol g0 + atol) / L (and its rate: rtol |p_i'| + atol_v / L).
+/// (rtol g0 + atol) / L; its rate is weighted rtol |p_i'| + atol_v (atol_v taken in rad/s:
+/// stricter than the atol_v / L the displacement rate would give).
 struct ChartScales {
   Vec7 length = Vec7::Zero();
 };

@@ -85,7 +85,9 @@ struct EventDrivenOptions {
   double output_dt = 1e-4;
   double omega_lim = 0.0;  ///< crossing time reported (0: none)
   double max_events_per_second = 1e6;
-  long max_steps_per_phase = 10'000'000;
+  /// CVODE's step limit per call (CVodeSetMaxNumSteps applies it per call to CVode, i.e. per
+  /// output interval or event), not per phase; reaching it ends the run (solver_failure).
+  long max_steps_per_call = 10'000'000;
   /// Called at output samples with (t, events so far, omega, phase); may be empty.
   std::function<void(double, long, double, Phase)> progress;
 };
