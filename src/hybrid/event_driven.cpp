@@ -92,10 +92,11 @@ class Integrator {
         // the gap and its rate start at degenerate zeros. The gap opens as 0.5 d_N'' t^2, far
         // below the position tolerance for many steps, and the integrator's own error (atol on
         // coordinates whose difference is d_N) can cross d_N back through 0: a contact onset
-        // that is an artefact, followed by the same release, in a loop. Until the gap has
-        // opened beyond the position tolerance, contact onset is d_N = -graze_tol (a
-        // penetration the integrator can resolve); the gap-rate witness waits until v_N is
-        // above the velocity tolerance (arm).
+        // that is an artefact (an arrival with |v_N| below the velocity tolerance that the
+        // contact problem releases at once), and the same release again, in a loop. After such
+        // an arrival, and until the gap has opened beyond the position tolerance, contact onset
+        // is d_N = -graze_tol (a penetration the integrator can resolve); the gap-rate witness
+        // waits until v_N is above the velocity tolerance after every release (arm).
         wit_.gap_offset = gap_banded_ ? graze_tol_ : 0.0;
         wit_.add(Witness::Gap, -1);
         if (!gap_rate_deferred_) wit_.add(Witness::GapRate, +1);
@@ -218,7 +219,9 @@ class Integrator {
       return false;
     }
     phase_ = tr.next;
-    gap_rate_deferred_ = gap_banded_ = tr.release;
+    gap_rate_deferred_ = tr.release;
+    gap_banded_ = tr.release && band_next_release_;
+    band_next_release_ = false;
     start_phase(t, tr.q, tr.v);
     emit_sample(t, q_restart_, v_restart_);
     return guard(t);
@@ -245,6 +248,27 @@ class Integrator {
     return t;
   }
 
+  /// The contact onset found by the d_N witness (or a gap minimum below 0) at hi: the last time
+  /// with d_N > 0 in the step. After a release the witness is d_N + graze_tol (build_witnesses):
+  /// the zero of d_N itself is still taken when the step holds it, so a slow re-contact is not
+  /// dated by the band; only a crossing in an earlier step (inside the band, below what the
+  /// integrator resolves) is dated by the band's witness.
+  double locate_onset(double hi, Vec7& q, Vec7& v) const {
+    auto gap = [&](double t) {
+      Vec7 qi, vi;
+      cur_->interpolate(t, qi, vi);
+      return m_.contact(qi, vi).d_N;
+    };
+    const double lo = cur_->step_start();
+    const double g_lo = gap(lo);
+    if (wit_.gap_offset == 0.0 || g_lo > 0.0) {
+      const double t = last_time_with_sign(lo, hi, g_lo, gap(hi), gap);
+      cur_->interpolate(t, q, v);
+      return t;
+    }
+    return locate(Witness::Gap, hi, q, v);
+  }
+
   /// Contact onset at t (free flight, q about to reach d_N = 0).
   bool arrive(double t, Vec7 q, const Vec7& v, const char* witness) {
     sw_.project_position(q, v);
@@ -253,7 +277,11 @@ class Integrator {
     e.t = t;
     e.phase_before = phase_;
     e.witness = witness;
-    return apply(t, sw_.gap_closed(t, q, v, e));
+    const Transition tr = sw_.gap_closed(t, q, v, e);
+    // an arrival released at once: its d_N crossing was the integrator's error (build_witnesses)
+    band_next_release_ =
+        tr.release && tr.n_events > 0 && tr.events[tr.n_events - 1].kind == EventKind::Contact;
+    return apply(t, tr);
   }
 
   bool on_gap_minimum(double t, const Vec7& q, const Vec7& v, bool& restarted) {
@@ -278,7 +306,7 @@ class Integrator {
         // the gap closed and reopened inside the step: back to its first crossing
         restarted = true;
         Vec7 qc, vc;
-        const double tc = locate(Witness::Gap, t, qc, vc);
+        const double tc = locate_onset(t, qc, vc);
         close_phase(tc);
         return arrive(tc, qc, vc, "v_N (gap minimum below 0: double crossing inside a step)");
       }
@@ -317,7 +345,7 @@ class Integrator {
     restarted = true;
     if (phase_ != Phase::Free) return on_contact_witness(w, t);
     Vec7 qc, vc;
-    const double tc = locate(Witness::Gap, t, qc, vc);
+    const double tc = locate_onset(t, qc, vc);
     close_phase(tc);
     return arrive(tc, qc, vc, "d_N");
   }
@@ -367,6 +395,7 @@ class Integrator {
   bool omega_pending_ = false;
   bool gap_rate_deferred_ = false;  // free flight after a release: gap-rate witness not armed
   bool gap_banded_ = false;         // ... and contact onset at d_N = -graze_tol
+  bool band_next_release_ = false;  // set by an arrival released at once (build_witnesses)
   double t_end_ = 0, phase_start_ = 0, t_restart_ = 0;
   Vec7 q_restart_ = Vec7::Zero(), v_restart_ = Vec7::Zero();
   double t_init_ = 0, next_out_ = 0;  // output grid t_init_ + k output_dt, next time to write
