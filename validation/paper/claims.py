@@ -17,10 +17,8 @@ Usage: validation/paper/claims.py [path/to/rubdyn] [--case cases/X.toml ...] [--
   --quick  coarser grids (a smoke run: do not commit its output)
 Runs go to out/claims/<case name>/. About 1-2 min per case on 2 cores.
 """
-import csv
 import json
 import os
-import subprocess
 import sys
 import tomllib
 
@@ -28,8 +26,11 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
-from common import ROOT, machine, script_args  # noqa: E402
+from common import (ROOT, Campbell, Run, machine, peaks, run_analyzed, script_args,  # noqa: E402
+                    spectrogram, sweep)
 
+CASES = [os.path.abspath(sys.argv[i + 1]) for i, a in enumerate(sys.argv) if a == "--case"]
+sys.argv = [a for i, a in enumerate(sys.argv) if a != "--case" and sys.argv[i - 1] != "--case"]
 RUBDYN, QUICK, OUT = script_args("claims")
 OUT_MD = os.path.join(HERE, "claims.md")
 T_LIM_TREF = 0.76          # the paper's anchor (section 5, Fig. 5a)
@@ -48,142 +49,6 @@ FIXED = ["carp-onevc", "carp-qn", "mj", "mj-proj"]
 
 
 # ------------------------------------------------------------------------------------ running
-def quiet(args):
-    """Runs rubdyn; exit code 3 (ended early) keeps its folder and is reported by the caller."""
-    return subprocess.run([RUBDYN] + args, stdout=subprocess.DEVNULL).returncode
-
-
-def run(case, folder, t_end, sets=(), extra=()):
-    args = ["run", case, "--out", folder, "--quiet", "--t-end", "%.6g" % t_end]
-    for s in sets:
-        args += ["--set", s]
-    quiet(args + list(extra))
-    quiet(["analyze", folder])
-    return folder
-
-
-def sweep(case, folder, t_end, varies, sets=(), extra=()):
-    args = ["sweep", case, "--out", folder, "--quiet", "--t-end", "%.6g" % t_end, "--jobs", "2"]
-    for v in varies:
-        args += ["--vary", v]
-    for s in sets:
-        args += ["--set", s]
-    quiet(args + list(extra))
-    with open(os.path.join(folder, "sweep.csv")) as f:
-        return list(csv.DictReader(f))
-
-
-def read_csv(path):
-    with open(path) as f:
-        return list(csv.DictReader(f))
-
-
-def num(x):
-    return float(x) if x not in ("", "nan", None) else np.nan
-
-
-class Run:
-    """One output folder with its analysis, as arrays."""
-
-    def __init__(self, folder):
-        self.folder = folder
-        ts = read_csv(os.path.join(folder, "timeseries.csv"))
-        de = read_csv(os.path.join(folder, "analysis", "derived.csv"))
-        self.t = np.array([num(r["t"]) for r in ts])
-        self.x = np.array([num(r["x_r"]) for r in ts])
-        self.y = np.array([num(r["y_r"]) for r in ts])
-        self.omega = np.array([num(r["omega"]) for r in ts])
-        self.v_t = np.array([num(r["v_t"]) for r in ts])
-        self.phase = [r["phase"] for r in ts]
-        self.prec = np.array([num(r["precession"]) for r in de])
-        self.ftr = np.array([num(r["friction_torque_ratio"]) for r in de])
-        self.contact = np.array([r["regime"] != "free" for r in de])
-        self.stick = np.array([r["regime"] == "rolling" for r in de])
-        self.events = read_csv(os.path.join(folder, "events.csv"))
-        self.a = json.load(open(os.path.join(folder, "analysis", "analysis.json")))
-        self.summary = json.load(open(os.path.join(folder, "summary.json")))
-
-    def last_liftoff(self):
-        """Time of the last lift-off (None: none); meaningful when the run ends in contact."""
-        t = [num(e["t"]) for e in self.events if e["kind"] in ("liftoff", "release")]
-        return max(t) if t else None
-
-    def liftoffs(self, t0, t1):
-        return sum(1 for e in self.events
-                   if e["kind"] in ("liftoff", "release") and t0 <= num(e["t"]) < t1)
-
-    def ends_in_contact(self):
-        return bool(self.contact[-1])
-
-    def sign_settles(self, sign):
-        """Earliest time after which the precession keeps `sign` (ignoring undefined samples),
-        or None when its last defined sample has the other sign."""
-        ok = ~np.isnan(self.prec)
-        bad = ok & (np.sign(self.prec) != sign)
-        if not ok.any() or bad[np.where(ok)[0][-1]]:
-            return None
-        idx = np.where(bad)[0]
-        return self.t[idx[-1]] if len(idx) else self.t[0]
-
-    def first_above(self, arr, level):
-        idx = np.where(arr > level)[0]
-        return self.t[idx[0]] if len(idx) else None
-
-
-def spectrogram(run, window=0.08, overlap=0.5, pad=4):
-    """Full spectrogram of z = x_r + i y_r, frame mean removed (the rotor sits in the clearance:
-    without detrending its static offset is the strongest 'peak' at 0 Hz, which the paper does
-    not show), Hann window, amplitude |Z| / sum(w). Returns (t_centres, omega_mean, f, A[frame, f])
-    on the output grid (event rows dropped)."""
-    keep = np.concatenate([[True], np.diff(run.t) > 1e-12])
-    t, z, om = run.t[keep], (run.x + 1j * run.y)[keep], run.omega[keep]
-    dt = np.median(np.diff(t))
-    n = int(round(window / dt))
-    step = max(1, int(round(n * (1 - overlap))))
-    w = np.hanning(n)
-    nf = pad * n
-    f = np.fft.fftshift(np.fft.fftfreq(nf, dt))
-    tc, oc, amp = [], [], []
-    for i0 in range(0, len(t) - n + 1, step):
-        seg = z[i0:i0 + n]
-        seg = (seg - seg.mean()) * w
-        amp.append(np.abs(np.fft.fftshift(np.fft.fft(seg, nf))) / w.sum())
-        tc.append(t[i0:i0 + n].mean())
-        oc.append(om[i0:i0 + n].mean())
-    return np.array(tc), np.array(oc), f, np.array(amp)
-
-
-class Campbell:
-    """rubdyn campbell of a case (k_s overridden as needed), interpolated in omega."""
-
-    def __init__(self, case, folder, omega_max, sets=()):
-        args = ["campbell", case, "--out", folder, "--omega-max", "%.6g" % omega_max,
-                "--points", "401"]
-        for s in sets:
-            args += ["--set", s]
-        quiet(args)
-        rows = read_csv(os.path.join(folder, "campbell.csv"))
-        self.om = np.array([num(r["omega_rad_s"]) for r in rows])
-        self.c = {k: np.array([num(r[k]) for r in rows]) for k in ("f1b", "f1f", "f2b", "f2f")}
-
-    def __call__(self, name, omega):
-        return np.interp(omega, self.om, self.c[name])
-
-
-def peaks(sg, t0, t1, sign=0, fmin=5.0):
-    """Median over frames in [t0, t1) of the strongest frequency (|f| >= fmin; sign > 0: forward
-    only, < 0: backward only) and the frames' mean omega."""
-    tc, oc, f, a = sg
-    sel = (tc >= t0) & (tc < t1)
-    if not sel.any():
-        return None, None
-    mask = np.abs(f) >= fmin
-    if sign:
-        mask &= np.sign(f) == sign
-    fr = [f[mask][np.argmax(row[mask])] for row in a[sel]]
-    return float(np.median(fr)), float(np.mean(oc[sel]))
-
-
 # ------------------------------------------------------------------------------------ measuring
 def measure(case):
     """Every number the claims need, for one case."""
@@ -199,7 +64,7 @@ def measure(case):
     # t_ref from the mu = 0.1 run (extended until omega_lim is crossed).
     t_end = spec["run"]["t_end"]
     for _ in range(4):
-        r = Run(run(case, os.path.join(out, "tref"), t_end, ["contact.mu=0.1"]))
+        r = Run(run_analyzed(RUBDYN, case, os.path.join(out, "tref"), t_end, ["contact.mu=0.1"]))
         if r.a["t_omega_lim"] is not None:
             break
         t_end *= 2
@@ -209,12 +74,13 @@ def measure(case):
     m["t_ref"] = tref
     T = T_RUN_TREF * tref
     m["T_run"] = T
-    cb = Campbell(case, os.path.join(out, "campbell"), 1.2 * om_lim)
-    cb10 = Campbell(case, os.path.join(out, "campbell-ks10"), 1.2 * om_lim,
+    cb = Campbell(RUBDYN, case, os.path.join(out, "campbell"), 1.2 * om_lim)
+    cb10 = Campbell(RUBDYN, case, os.path.join(out, "campbell-ks10"), 1.2 * om_lim,
                     ["stator.k=%.9g" % (10 * k_ref)])
 
     # mu sweep (Fig. 5-7, 9a-b).
-    rows = sweep(case, os.path.join(out, "mu"), T, ["contact.mu=" + ",".join("%g" % x for x in MUS)])
+    rows = sweep(RUBDYN, case, os.path.join(out, "mu"), T,
+                 ["contact.mu=" + ",".join("%g" % x for x in MUS)])
     runs = {float(r["contact.mu"]): Run(r["folder"]) for r in rows}
     m["mu"] = {}
     for mu, rr in runs.items():
@@ -248,7 +114,8 @@ def measure(case):
         m["mu"][mu]["late_campbell"] = {k: float(cb(k, om)) for k in ("f1b", "f2b")}
 
     # the longer mu = 0.25 run (Fig. 9c)
-    rl = Run(run(case, os.path.join(out, "mu0.25-long"), T_LONG_TREF * tref, ["contact.mu=0.25"]))
+    rl = Run(run_analyzed(RUBDYN, case, os.path.join(out, "mu0.25-long"), T_LONG_TREF * tref,
+                          ["contact.mu=0.25"]))
     sg = spectrogram(rl)
     d = {"complete": rl.summary.get("complete", True), "t_end": rl.t[-1] / tref,
          "whirl_onset": rl.a["whirl_onset"] / tref if rl.a["whirl_onset"] else None,
@@ -273,14 +140,15 @@ def measure(case):
     ms = ",".join("%.9g" % (x * m_ref) for x in MS_GRID)
     m["grid"] = {}
     for mu in (0.1, 0.17):
-        rows = sweep(case, os.path.join(out, "grid-mu%g" % mu), T,
+        rows = sweep(RUBDYN, case, os.path.join(out, "grid-mu%g" % mu), T,
                      ["stator.mass=" + ms, "stator.k=" + ks], ["contact.mu=%g" % mu])
         g = {}
         for r in rows:
-            key = (round(float(r["stator.mass"]) / m_ref, 2), round(float(r["stator.k"]) / k_ref, 2))
+            key = (round(float(r["stator.mass"]) / m_ref, 2),
+                   round(float(r["stator.k"]) / k_ref, 2))
             g[key] = (float(r["omega_max"]) / om_lim, r["limited"] == "yes", r["termination"])
         m["grid"][mu] = g
-    k10 = Run(run(case, os.path.join(out, "ks10"), T, ["contact.mu=0.1",
+    k10 = Run(run_analyzed(RUBDYN, case, os.path.join(out, "ks10"), T, ["contact.mu=0.1",
                                                        "stator.k=%.9g" % (10 * k_ref)]))
     sg = spectrogram(k10)
     d = {"limited": k10.a["limited"], "omega_max_rel": k10.a["omega_max"] / om_lim,
@@ -304,7 +172,7 @@ def measure(case):
         d["peak_bw2"], d["f2b_bw2"] = float(np.median(fr)), float(cb10("f2b", om))
     m["ks10"] = d
     # Fig. 11c: carp-onevc against the event-driven solver at k_s* = 10
-    c10 = Run(run(case, os.path.join(out, "ks10-carp"), T, ["contact.mu=0.1",
+    c10 = Run(run_analyzed(RUBDYN, case, os.path.join(out, "ks10-carp"), T, ["contact.mu=0.1",
                                                             "stator.k=%.9g" % (10 * k_ref)],
                   ["--solver", "carp-onevc", "--h", "1e-6"]))
     late = c10.t >= 0.5 * tref
@@ -318,7 +186,7 @@ def measure(case):
     # section 5 intro: the four fixed-step schemes (h = 1e-6) against the event-driven run
     m["solvers"] = {}
     for s in FIXED:
-        rr = Run(run(case, os.path.join(out, "solver-" + s), T, ["contact.mu=0.1"],
+        rr = Run(run_analyzed(RUBDYN, case, os.path.join(out, "solver-" + s), T, ["contact.mu=0.1"],
                      ["--solver", s, "--h", "1e-6"]))
         wall = rr.summary.get("wall_seconds", rr.summary.get("wall", np.nan))
         m["solvers"][s] = {"t_lim": rr.a["t_omega_lim"] / tref if rr.a["t_omega_lim"] else None,
@@ -554,7 +422,7 @@ def claims(m):
     add("F11b", "5.2, Fig. 11b", "k_s* = 10: v_prec < 0 for t > 0.5 t_ref (dry whip)",
         "v_prec < 0 from %s on" % tt(k["neg_after"]),
         R if ok else (Q if k["neg_after"] is not None else N))
-    ok = near_f(k["peak_bw"], -109) and near_f(k["peak_bw"], -k["f1b_bw"]) if k["peak_bw"] else False
+    ok = bool(k["peak_bw"]) and near_f(k["peak_bw"], -109) and near_f(k["peak_bw"], -k["f1b_bw"])
     add("F12a", "5.2, Fig. 12", "k_s* = 10: main peak at about -109 Hz, on f1b",
         "strongest backward peak after 0.5 t_ref %s Hz; -f1b there %s Hz" % (
             f3(k["peak_bw"]), f3(-k["f1b_bw"] if k["f1b_bw"] else None)),
@@ -644,11 +512,7 @@ def jsonable(x):
 
 
 def main():
-    cases = []
-    argv = sys.argv[1:]
-    for i, a in enumerate(argv):
-        if a == "--case":
-            cases.append(os.path.abspath(argv[i + 1]))
+    cases = list(CASES)
     if not cases:
         cases = [os.path.join(ROOT, "cases", "reference.toml")]
         p = os.path.join(ROOT, "cases", "paper.toml")
