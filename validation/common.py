@@ -131,6 +131,7 @@ class Run:
         self.y = np.array([num(r["y_r"]) for r in ts])
         self.omega = np.array([num(r["omega"]) for r in ts])
         self.v_t = np.array([num(r["v_t"]) for r in ts])
+        self.dN = np.array([num(r["d_N"]) for r in ts])
         self.phase = [r["phase"] for r in ts]
         self.prec = np.array([num(r["precession"]) for r in de])
         self.ftr = np.array([num(r["friction_torque_ratio"]) for r in de])
