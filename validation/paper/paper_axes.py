@@ -151,8 +151,41 @@ def figure_set(rubdyn, case, out, figdir, quick=False):
     ax[1].legend(fontsize=7)
     fig.suptitle("%s: time-stepper penetration and rotor orbits" % name)
     save(fig, "penetration-orbits.png")
+    fig13(rubdyn, case, out, spec, T, oml, findings, quick)
+    save(plt.gcf(), "fig13.png")
     findings.append("tau_a = %g N m; figures in %s" % (tau, os.path.basename(figdir)))
     return findings
+
+
+def fig13(rubdyn, case, out, spec, T, oml, findings, quick):
+    """Omega_max / Omega_lim against k_s* for m_s* = 1, 2.10, 3.15: (a) mu = 0.1 with the
+    event-driven solver, carp-onevc and mj-proj (h = 1e-6); (b) mu = 0.17, event-driven."""
+    k_ref, m_ref = spec["stator"]["k"], spec["stator"]["mass"]
+    ks = [1, 2, 3, 4, 5, 5.5, 6, 7, 8, 9, 10] if not quick else [1, 10]
+    ms = [1, 2.10, 3.15] if not quick else [1]
+    varies = ["stator.mass=" + ",".join("%.9g" % (m * m_ref) for m in ms),
+              "stator.k=" + ",".join("%.9g" % (k * k_ref) for k in ks)]
+    fig, axes = plt.subplots(1, 2, figsize=(12, 5), sharey=True)
+    for ax, mu, solvers in ((axes[0], 0.1, ("event", "carp-onevc", "mj-proj")),
+                            (axes[1], 0.17, ("event",))):
+        for solver, style in zip(solvers, ("-o", "--x", ":s")):
+            extra = [] if solver == "event" else ["--solver", solver, "--h", "1e-6"]
+            rows = sweep(rubdyn, case, os.path.join(out, "fig13-mu%g-%s" % (mu, solver)), T,
+                         varies, ["contact.mu=%g" % mu], extra)
+            for i, m in enumerate(ms):
+                pts = [r for r in rows if abs(float(r["stator.mass"]) / m_ref - m) < 1e-9]
+                w = [float(r["omega_max"]) / oml for r in pts]
+                ax.plot(ks, w, style, color="C%d" % i, ms=4,
+                        label="m_s* = %g, %s" % (m, solver))
+                lim = [k for k, r in zip(ks, pts) if r["limited"] == "yes"]
+                findings.append("Fig. 13, mu = %g, m_s* = %g, %s: limited for k_s* in %s" % (
+                    mu, m, solver, lim or "none"))
+        ax.axhline(1, color="r", ls=":", lw=0.8)
+        ax.set_xlabel("k_s*")
+        ax.set_title("Fig. 13%s: mu = %g" % ("a" if mu == 0.1 else "b", mu))
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=6)
+    axes[0].set_ylabel("max Omega / Omega_lim")
 
 
 def dn(run, g0):

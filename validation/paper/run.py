@@ -9,7 +9,7 @@ Then the same figures on cases/paper.toml in the paper's axes (t / t_ref, Omega 
 d_N / g0; paper_axes.py) into paper-case/.
 Usage: validation/paper/run.py [path/to/rubdyn] [--quick] [--paper-case-only]
   --quick            shorter runs and coarser grids (a smoke run: do not commit its output)
-  --paper-case-only  only the cases/paper.toml set (about 1 min)
+  --paper-case-only  only the cases/paper.toml set (about 40 s)
 """
 import csv
 import json
