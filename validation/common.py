@@ -208,14 +208,14 @@ class Campbell:
         return np.interp(omega, self.om, self.c[name])
 
 
-def peaks(sg, t0, t1, sign=0, fmin=5.0):
-    """Median over frames in [t0, t1) of the strongest frequency (|f| >= fmin; sign > 0: forward
-    only, < 0: backward only) and the frames' mean omega."""
+def peaks(sg, t0, t1, sign=0, fmin=5.0, fmax=np.inf):
+    """Median over frames in [t0, t1) of the strongest frequency (fmin <= |f| <= fmax; sign > 0:
+    forward only, < 0: backward only) and the frames' mean omega."""
     tc, oc, f, a = sg
     sel = (tc >= t0) & (tc < t1)
     if not sel.any():
         return None, None
-    mask = np.abs(f) >= fmin
+    mask = (np.abs(f) >= fmin) & (np.abs(f) <= fmax)
     if sign:
         mask &= np.sign(f) == sign
     fr = [f[mask][np.argmax(row[mask])] for row in a[sel]]
