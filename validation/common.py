@@ -8,6 +8,8 @@ import platform
 import subprocess
 import sys
 
+import numpy as np
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CASE = os.path.join(ROOT, "cases", "reference.toml")
 
@@ -76,3 +78,145 @@ def grid_errors(grid, ref):
     kmax = max(ref)
     omega = abs(grid[kmax][2] - ref[kmax][2]) if kmax in grid else float("nan")
     return orbit, omega
+
+
+# ---- runs read back for the paper studies (validation/paper, validation/calibration)
+def quiet(rubdyn, args):
+    """Runs rubdyn with args, output discarded; returns the exit code (3, a run ended early,
+    keeps its folder: the caller reads summary.json)."""
+    return subprocess.run([rubdyn] + args, stdout=subprocess.DEVNULL).returncode
+
+
+def run_analyzed(rubdyn, case, folder, t_end, sets=(), extra=()):
+    """`rubdyn run` (t_end, --set overrides, extra options) then `rubdyn analyze`; the folder."""
+    args = ["run", case, "--out", folder, "--quiet", "--t-end", "%.6g" % t_end]
+    for s in sets:
+        args += ["--set", s]
+    quiet(rubdyn, args + list(extra))
+    quiet(rubdyn, ["analyze", folder])
+    return folder
+
+
+def sweep(rubdyn, case, folder, t_end, varies, sets=(), extra=(), jobs=2):
+    """`rubdyn sweep` of the product of `varies`; the rows of sweep.csv."""
+    args = ["sweep", case, "--out", folder, "--quiet", "--t-end", "%.6g" % t_end,
+            "--jobs", str(jobs)]
+    for v in varies:
+        args += ["--vary", v]
+    for s in sets:
+        args += ["--set", s]
+    quiet(rubdyn, args + list(extra))
+    with open(os.path.join(folder, "sweep.csv")) as f:
+        return list(csv.DictReader(f))
+
+
+def read_csv(path):
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def num(x):
+    return float(x) if x not in ("", "nan", None) else np.nan
+
+
+class Run:
+    """One output folder with its analysis, as arrays."""
+
+    def __init__(self, folder):
+        self.folder = folder
+        ts = read_csv(os.path.join(folder, "timeseries.csv"))
+        de = read_csv(os.path.join(folder, "analysis", "derived.csv"))
+        self.t = np.array([num(r["t"]) for r in ts])
+        self.x = np.array([num(r["x_r"]) for r in ts])
+        self.y = np.array([num(r["y_r"]) for r in ts])
+        self.omega = np.array([num(r["omega"]) for r in ts])
+        self.v_t = np.array([num(r["v_t"]) for r in ts])
+        self.dN = np.array([num(r["d_N"]) for r in ts])
+        self.phase = [r["phase"] for r in ts]
+        self.prec = np.array([num(r["precession"]) for r in de])
+        self.ftr = np.array([num(r["friction_torque_ratio"]) for r in de])
+        self.contact = np.array([r["regime"] != "free" for r in de])
+        self.stick = np.array([r["regime"] == "rolling" for r in de])
+        self.events = read_csv(os.path.join(folder, "events.csv"))
+        self.a = json.load(open(os.path.join(folder, "analysis", "analysis.json")))
+        self.summary = json.load(open(os.path.join(folder, "summary.json")))
+
+    def last_liftoff(self):
+        """Time of the last lift-off (None: none); meaningful when the run ends in contact."""
+        t = [num(e["t"]) for e in self.events if e["kind"] in ("liftoff", "release")]
+        return max(t) if t else None
+
+    def liftoffs(self, t0, t1):
+        return sum(1 for e in self.events
+                   if e["kind"] in ("liftoff", "release") and t0 <= num(e["t"]) < t1)
+
+    def ends_in_contact(self):
+        return bool(self.contact[-1])
+
+    def sign_settles(self, sign):
+        """Earliest time after which the precession keeps `sign` (ignoring undefined samples),
+        or None when its last defined sample has the other sign."""
+        ok = ~np.isnan(self.prec)
+        bad = ok & (np.sign(self.prec) != sign)
+        if not ok.any() or bad[np.where(ok)[0][-1]]:
+            return None
+        idx = np.where(bad)[0]
+        return self.t[idx[-1]] if len(idx) else self.t[0]
+
+    def first_above(self, arr, level):
+        idx = np.where(arr > level)[0]
+        return self.t[idx[0]] if len(idx) else None
+
+
+def spectrogram(run, window=0.08, overlap=0.5, pad=4):
+    """Full spectrogram of z = x_r + i y_r, frame mean removed (the rotor sits in the clearance:
+    without detrending its static offset is the strongest 'peak' at 0 Hz, which the paper does
+    not show), Hann window, amplitude |Z| / sum(w). Returns (t_centres, omega_mean, f, A[frame, f])
+    on the output grid (event rows dropped)."""
+    keep = np.concatenate([[True], np.diff(run.t) > 1e-12])
+    t, z, om = run.t[keep], (run.x + 1j * run.y)[keep], run.omega[keep]
+    dt = np.median(np.diff(t))
+    n = int(round(window / dt))
+    step = max(1, int(round(n * (1 - overlap))))
+    w = np.hanning(n)
+    nf = pad * n
+    f = np.fft.fftshift(np.fft.fftfreq(nf, dt))
+    tc, oc, amp = [], [], []
+    for i0 in range(0, len(t) - n + 1, step):
+        seg = z[i0:i0 + n]
+        seg = (seg - seg.mean()) * w
+        amp.append(np.abs(np.fft.fftshift(np.fft.fft(seg, nf))) / w.sum())
+        tc.append(t[i0:i0 + n].mean())
+        oc.append(om[i0:i0 + n].mean())
+    return np.array(tc), np.array(oc), f, np.array(amp)
+
+
+class Campbell:
+    """rubdyn campbell of a case (k_s overridden as needed), interpolated in omega."""
+
+    def __init__(self, rubdyn, case, folder, omega_max, sets=()):
+        args = ["campbell", case, "--out", folder, "--omega-max", "%.6g" % omega_max,
+                "--points", "401"]
+        for s in sets:
+            args += ["--set", s]
+        quiet(rubdyn, args)
+        rows = read_csv(os.path.join(folder, "campbell.csv"))
+        self.om = np.array([num(r["omega_rad_s"]) for r in rows])
+        self.c = {k: np.array([num(r[k]) for r in rows]) for k in ("f1b", "f1f", "f2b", "f2f")}
+
+    def __call__(self, name, omega):
+        return np.interp(omega, self.om, self.c[name])
+
+
+def peaks(sg, t0, t1, sign=0, fmin=5.0, fmax=np.inf):
+    """Median over frames in [t0, t1) of the strongest frequency (fmin <= |f| <= fmax; sign > 0:
+    forward only, < 0: backward only) and the frames' mean omega."""
+    tc, oc, f, a = sg
+    sel = (tc >= t0) & (tc < t1)
+    if not sel.any():
+        return None, None
+    mask = (np.abs(f) >= fmin) & (np.abs(f) <= fmax)
+    if sign:
+        mask &= np.sign(f) == sign
+    fr = [f[mask][np.argmax(row[mask])] for row in a[sel]]
+    return float(np.median(fr)), float(np.mean(oc[sel]))
