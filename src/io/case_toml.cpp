@@ -17,6 +17,7 @@
 
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
+#include "rubdyn/stepping/fixed_step.hpp"
 
 namespace rubdyn {
 
@@ -285,6 +286,14 @@ class Loader {
         }
         case Kind::Integer:
           if (auto i = n->as_integer()) {
+            // TOML integers are 64-bit: a value outside int would wrap (4294967297 -> 1)
+            if (i->get() < std::numeric_limits<int>::min() ||
+                i->get() > std::numeric_limits<int>::max()) {
+              issue(full, n, node_text(*n),
+                    fmt::format("must be an integer in [{}, {}]", std::numeric_limits<int>::min(),
+                                std::numeric_limits<int>::max()));
+              break;
+            }
             *ks.integer(c) = static_cast<int>(i->get());
           } else {
             issue(full, n, node_text(*n), "must be an integer");
@@ -372,13 +381,32 @@ class Loader {
     rule(so.atol > 0, "solver.atol", so.atol, "must be > 0");
     rule(so.max_events_per_second > 0, "solver.max_events_per_second", so.max_events_per_second,
          "must be > 0");
-    rule(so.h > 0, "solver.h", so.h, "must be > 0");
-    rule(so.itmax >= 1, "solver.itmax", so.itmax, "must be >= 1");
-    rule(so.qn_tol > 0, "solver.qn_tol", so.qn_tol, "must be > 0");
-    rule(so.theta >= 0.5 && so.theta <= 1, "solver.theta", so.theta, "must lie in [0.5, 1]");
-    rule(so.eta >= 0 && so.eta <= 1, "solver.eta", so.eta, "must lie in [0, 1]");
-    rule(c.output.dt > 0, "output.dt", c.output.dt, "must be > 0");
-    rule(c.output.every >= 0, "output.every", c.output.every, "must be >= 0 (0: use output.dt)");
+    // The fixed-step options: the rules are stated once, in stepping/fixed_step.cpp. The step
+    // count rules (a whole number of steps, at most kMaxFixedSteps) apply to fixed-step runs.
+    {
+      FixedStepOptions fo;
+      fo.h = so.h;
+      fo.itmax = so.itmax;
+      fo.qn_tol = so.qn_tol;
+      fo.theta = so.theta;
+      fo.eta = so.eta;
+      fo.output_every = c.output.every;
+      fo.output_dt = c.output.dt;
+      auto bad = fixed_step_option_problems(fo);
+      if (so.kind != "event") {
+        for (auto& p : fixed_step_count_problems(fo.h, 0.0, c.run.t_end)) bad.push_back(p);
+      }
+      static const std::map<std::string, std::string> key_of = {
+          {"h", "solver.h"},          {"itmax", "solver.itmax"},       {"qn_tol", "solver.qn_tol"},
+          {"theta", "solver.theta"},  {"eta", "solver.eta"},           {"t_end", "run.t_end"},
+          {"output_dt", "output.dt"}, {"output_every", "output.every"}};
+      for (const auto& p : bad) {
+        const std::string& key = key_of.at(p.option);
+        if (key == "run.t_end" && !(c.run.t_end > 0)) continue;  // reported below as > 0
+        const toml::node* n = at(key);
+        issue(key, n, n ? node_text(*n) : p.value + " (default)", p.rule);
+      }
+    }
     // The initial state must not penetrate the stator: d_N = g0 - |(x_r - x_s, y_r - y_s)| >= 0.
     if (s.gap > 0) {
       const Vec7& q = c.initial.q0;
@@ -428,9 +456,29 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
   return parse_case(ss.str(), path, overrides);
 }
 
+std::string toml_quote(std::string_view text) {
+  std::string out = "\"";
+  for (const char ch : text) {
+    switch (ch) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      case '\r': out += "\\r"; break;
+      default:
+        if (static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f) {
+          out += fmt::format("\\u{:04X}", static_cast<unsigned>(static_cast<unsigned char>(ch)));
+        } else {
+          out += ch;
+        }
+    }
+  }
+  return out + "\"";
+}
+
 std::string to_toml(const CaseSpec& c) {
-  std::string out =
-      fmt::format("# resolved case: every key with its value (rubdyn)\nname = \"{}\"\n", c.name);
+  std::string out = fmt::format("# resolved case: every key with its value (rubdyn)\nname = {}\n",
+                                toml_quote(c.name));
   CaseSpec copy = c;  // schema accessors take a mutable CaseSpec
   std::string section;
   for (const auto& ks : schema()) {
@@ -441,15 +489,7 @@ std::string to_toml(const CaseSpec& c) {
     switch (ks.kind) {
       case Kind::Number: out += fmt::format("{} = {}\n", ks.key, *ks.num(copy)); break;
       case Kind::Integer: out += fmt::format("{} = {}\n", ks.key, *ks.integer(copy)); break;
-      case Kind::String: {
-        std::string v = *ks.text(copy), esc;
-        for (char ch : v) {
-          if (ch == '"' || ch == '\\') esc += '\\';
-          esc += ch;
-        }
-        out += fmt::format("{} = \"{}\"\n", ks.key, esc);
-        break;
-      }
+      case Kind::String: out += fmt::format("{} = {}\n", ks.key, toml_quote(*ks.text(copy))); break;
     }
   }
   return out;

@@ -9,6 +9,7 @@
 #include <Eigen/LU>
 #include <chrono>
 #include <cmath>
+#include <stdexcept>
 
 #include "rubdyn/core/run_monitor.hpp"
 
@@ -516,7 +517,10 @@ RunSummary FixedStepRunner::run(const MechanicalState& init, double t_end) {
   q_ = init.q;
   v_ = init.v;
   sum_.energy_initial = energy(q_, v_);
+  // fixed_step_option_problems (checked by run_fixed_step) makes the span a whole number of
+  // steps: with h the span over that number the last step ends at t_end (to round-off).
   const long n_steps = std::max(1L, std::lround((t_end - init.t) / h_));
+  h_ = (t_end - init.t) / static_cast<double>(n_steps);
   if (carpenter) {
     // Start-up: q_1 = q_0 + h v_0 + h^2/2 a_0 with a_0 the contact-free acceleration, i.e. the
     // scheme applied at i = 0 with a fictitious q_{-1} = q_0 - h v_0 + h^2/2 a_0: then the
@@ -538,6 +542,11 @@ RunSummary FixedStepRunner::run(const MechanicalState& init, double t_end) {
   double t = init.t;
   for (; i < last; ++i) {
     t = init.t + static_cast<double>(i) * h_;
+    if (o_.stop && o_.stop->load(std::memory_order_relaxed)) {
+      sum_.termination = Termination::Interrupted;
+      sum_.message = fmt::format("interrupted at t = {:.17g}", t);
+      break;
+    }
     if (carpenter) c_start_ = m_.contact(q_, v_);  // (Moreau-Jean computes it in its step)
     const bool ok = carpenter
                         ? carpenter_step(t, o_.scheme == FixedStepScheme::CarpQN)
@@ -615,8 +624,57 @@ RunSummary FixedStepRunner::run(const MechanicalState& init, double t_end) {
 
 }  // namespace
 
+std::vector<OptionProblem> fixed_step_option_problems(const FixedStepOptions& o) {
+  std::vector<OptionProblem> bad;
+  auto num = [](double x) { return fmt::format("{:.17g}", x); };
+  if (!(std::isfinite(o.h) && o.h > 0.0)) bad.push_back({"h", num(o.h), "must be finite and > 0"});
+  if (o.itmax < 1) bad.push_back({"itmax", fmt::format("{}", o.itmax), "must be >= 1"});
+  if (!(o.qn_tol > 0.0)) bad.push_back({"qn_tol", num(o.qn_tol), "must be > 0"});
+  if (!(o.theta >= 0.5 && o.theta <= 1.0))
+    bad.push_back({"theta", num(o.theta), "must lie in [0.5, 1]"});
+  if (!(o.eta >= 0.0 && o.eta <= 1.0)) bad.push_back({"eta", num(o.eta), "must lie in [0, 1]"});
+  if (o.output_every < 0)
+    bad.push_back(
+        {"output_every", fmt::format("{}", o.output_every), "must be >= 0 (0: use output_dt)"});
+  if (!(std::isfinite(o.output_dt) && o.output_dt > 0.0))
+    bad.push_back({"output_dt", num(o.output_dt), "must be finite and > 0"});
+  return bad;
+}
+
+std::vector<OptionProblem> fixed_step_count_problems(double h, double t_start, double t_end) {
+  std::vector<OptionProblem> bad;
+  const double span = t_end - t_start;
+  if (!(std::isfinite(span) && span > 0.0)) {
+    bad.push_back({"t_end", fmt::format("{:.17g}", t_end),
+                   fmt::format("must be finite and > t_start = {:.17g}", t_start)});
+    return bad;
+  }
+  if (!(std::isfinite(h) && h > 0.0)) return bad;  // reported by fixed_step_option_problems
+  const double steps = span / h;
+  if (!(steps <= static_cast<double>(kMaxFixedSteps))) {
+    bad.push_back({"h", fmt::format("{:.17g}", h),
+                   fmt::format("(t_end - t_start) / h = {:.6g} steps, above the limit of {} steps",
+                               steps, kMaxFixedSteps)});
+  } else if (std::abs(steps - std::round(steps)) > 1e-6 || std::round(steps) < 1.0) {
+    // 1e-6 of a step: far above the round-off of a decimal ratio (0.01 / 1e-6 is
+    // 10000.000000000002), far below any fraction of a step anyone means
+    bad.push_back({"h", fmt::format("{:.17g}", h),
+                   fmt::format("t_end - t_start = {:.17g} s is {:.9g} steps, not a whole number "
+                               "(the schemes keep one step; take h = (t_end - t_start) / n)",
+                               span, steps)});
+  }
+  return bad;
+}
+
 RunSummary run_fixed_step(const LagrangianModel& model, const MechanicalState& initial,
                           double t_end, const FixedStepOptions& opt, OutputSink& sink) {
+  auto bad = fixed_step_option_problems(opt);
+  for (auto& p : fixed_step_count_problems(opt.h, initial.t, t_end)) bad.push_back(std::move(p));
+  if (!bad.empty()) {
+    std::string text = "invalid fixed-step options:";
+    for (const auto& b : bad) text += fmt::format("\n  {} = {}: {}", b.option, b.value, b.rule);
+    throw std::invalid_argument(text);
+  }
   FixedStepRunner r(model, opt, sink);
   return r.run(initial, t_end);
 }

@@ -25,6 +25,11 @@ CaseSpec parse_case(std::string_view toml_text, const std::string& source,
 /// back with parse_case gives the same CaseSpec (numbers are written with 17 significant digits).
 std::string to_toml(const CaseSpec& c);
 
+/// `text` as a TOML basic string, quotes included: ", \\ and every control character escaped,
+/// so that parsing it gives `text` back (case.resolved.toml, and --out / --set values that are
+/// paths, never read as TOML escapes).
+std::string toml_quote(std::string_view text);
+
 /// The output folder of a case: output.folder if set, else "out/<name>".
 std::string output_folder(const CaseSpec& c);
 
