@@ -217,6 +217,10 @@ RunRecord read_run(const std::string& dir) {
   while (std::getline(f, line)) {
     ++ln;
     if (line.empty()) continue;
+    if (f.eof()) {  // no line end: cut short
+      r.warnings.push_back(cut_row_warning(ts_path, ln));
+      break;
+    }
     const auto v = split_csv_line(line);
     if (v.size() != header.size()) {
       throw std::runtime_error(
@@ -242,9 +246,11 @@ RunRecord read_run(const std::string& dir) {
   }
   std::ifstream ev((fs::path(dir) / "events.csv").string());
   if (ev) {
-    std::getline(ev, line);
+    if (!std::getline(ev, line)) {
+      r.warnings.push_back(dir + "/events.csv: empty (no header): read as no events");
+    }
     while (std::getline(ev, line))
-      if (!line.empty()) ++r.events;
+      if (!line.empty() && !ev.eof()) ++r.events;  // a row without line end was cut short
   }
   std::ifstream sj((fs::path(dir) / "summary.json").string());
   std::string text((std::istreambuf_iterator<char>(sj)), std::istreambuf_iterator<char>());

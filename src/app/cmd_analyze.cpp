@@ -27,6 +27,7 @@ int analyze_command(const AnalyzeArgs& a) {
   }
   if (!(o.f_max > 0.0)) throw std::runtime_error("--fmax must be > 0");
   const RunRecord r = read_run(a.folder);
+  for (const auto& w : r.warnings) std::fprintf(stderr, "rubdyn analyze: warning: %s\n", w.c_str());
   const RunVerdicts v = write_analysis(r, o, a.out);
   std::printf("%s", verdicts_json(v).c_str());
   if (!r.complete) std::fprintf(stderr, "rubdyn analyze: note: the run is incomplete\n");

@@ -14,6 +14,7 @@
 #include "rubdyn/analysis/campbell.hpp"
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/text_files.hpp"
 
 namespace rubdyn::app {
 
@@ -61,11 +62,7 @@ int campbell_command(const CampbellArgs& a) {
   const std::string dir = a.out.empty() ? output_folder(spec) : a.out;
   std::filesystem::create_directories(dir);
   const std::string path = (std::filesystem::path(dir) / "campbell.csv").string();
-  {
-    std::ofstream f(path);
-    f << campbell_csv(d);
-    if (!f) throw std::runtime_error("cannot write " + path);
-  }
+  write_file_atomic(path, campbell_csv(d));  // every write checked, close included
 
   const CampbellSolver solver(spec.params, a.damped);
   std::printf("Campbell diagram of %s: coupled rotor + stator, %s, %d speeds from 0 to %g rad/s\n",

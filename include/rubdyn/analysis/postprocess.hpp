@@ -52,6 +52,9 @@ struct RunRecord {
   std::vector<Sample> samples;  ///< timeseries.csv, in file order
   long events = 0;              ///< rows of events.csv (0 if absent)
   bool complete = true;         ///< summary.json "complete" (false: ended early or absent)
+  /// What the reader tolerated: a last row without its line end (a killed run), dropped; an
+  /// empty events.csv. The CLI prints them.
+  std::vector<std::string> warnings;
 };
 /// Throws std::runtime_error naming the file, line and problem on a missing or bad file.
 RunRecord read_run(const std::string& dir);
