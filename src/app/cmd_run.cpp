@@ -6,12 +6,14 @@
 #include <chrono>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "rubdyn/core/report.hpp"
+#include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/output_folder.hpp"
 #include "rubdyn/io/simulate.hpp"
@@ -22,26 +24,55 @@ namespace {
 
 struct RunArgs {
   CaseArgs c;  // CASE and --set
-  // kept as text: they become overrides of case keys and are validated (and reported) as such
-  std::string solver, method, out, rtol, atol, t_end, h, output_every;
+  // kept as text: they become overrides of case keys and are validated (and reported) as such;
+  // unset when not given (an empty --solver '' is given, and rejected as a kind)
+  std::optional<std::string> solver, method, out, rtol, atol, t_end, h, output_every;
   bool quiet = false;
 };
 
 int run_command(const RunArgs& a) {
   // Command-line solver options are overrides of the case's keys: validated like the file.
   std::vector<std::string> sets = a.c.sets;
-  if (!a.solver.empty()) sets.push_back("solver.kind=" + a.solver);
-  if (!a.method.empty()) sets.push_back("solver.method=" + a.method);
-  if (!a.rtol.empty()) sets.push_back("solver.rtol=" + a.rtol);
-  if (!a.atol.empty()) sets.push_back("solver.atol=" + a.atol);
-  if (!a.h.empty()) sets.push_back("solver.h=" + a.h);
-  if (!a.t_end.empty()) sets.push_back("run.t_end=" + a.t_end);
-  if (!a.output_every.empty()) sets.push_back("output.every=" + a.output_every);
-  if (!a.out.empty()) sets.push_back("output.folder=\"" + a.out + "\"");
-  const CaseSpec spec = load_case(a.c.path, sets);  // throws CaseError: exit 2, nothing written
+  if (a.solver) sets.push_back("solver.kind=" + toml_quote(*a.solver));
+  if (a.method) sets.push_back("solver.method=" + toml_quote(*a.method));
+  if (a.rtol) sets.push_back("solver.rtol=" + *a.rtol);
+  if (a.atol) sets.push_back("solver.atol=" + *a.atol);
+  if (a.h) sets.push_back("solver.h=" + *a.h);
+  if (a.t_end) sets.push_back("run.t_end=" + *a.t_end);
+  if (a.output_every) sets.push_back("output.every=" + *a.output_every);
+  // a path is a string as given, never TOML text ('run\new' is not run<newline>ew)
+  if (a.out) sets.push_back("output.folder=" + toml_quote(*a.out));
+  std::vector<CaseIssue> bad;
+  CaseSpec spec;
+  try {
+    spec = load_case(a.c.path, sets);
+  } catch (const CaseError& e) {
+    bad = e.issues();
+  }
+  // options of the other family of solvers would be silently ignored: refused
+  if (bad.empty() && spec.solver.kind == "event") {
+    if (a.h)
+      bad.push_back({"command line", 0, "--h", *a.h,
+                     "applies to the fixed-step schemes only; the event solver has no step "
+                     "(give --solver mj, carp-onevc, ... or drop --h)"});
+    if (a.output_every)
+      bad.push_back({"command line", 0, "--output-every", *a.output_every,
+                     "applies to the fixed-step schemes only; the event solver writes every "
+                     "output.dt"});
+  }
+  if (bad.empty() && spec.solver.kind != "event") {
+    for (const auto& [given, name] : {std::pair{a.rtol, "--rtol"}, std::pair{a.atol, "--atol"},
+                                      std::pair{a.method, "--method"}})
+      if (given)
+        bad.push_back(
+            {"command line", 0, name, *given,
+             "applies to the event solver only (solver.kind is " + spec.solver.kind + ")"});
+  }
+  if (!bad.empty()) throw CaseError(bad);  // exit 2, nothing written
 
   const std::string dir = output_folder(spec);
-  OutputFolder sink(dir, spec);
+  stop_on_signals();
+  OutputFolder sink(dir, spec, &stop_flag());  // FolderError: exit 2, nothing written
 
   const bool show_progress = !a.quiet && isatty(fileno(stderr));
   auto last = std::chrono::steady_clock::now();
@@ -54,9 +85,14 @@ int run_command(const RunArgs& a) {
     std::fflush(stderr);
   };
 
-  const RunSummary summary =
-      simulate(spec, sink, show_progress ? ProgressFn(progress) : ProgressFn());
+  RunSummary summary =
+      simulate(spec, sink, show_progress ? ProgressFn(progress) : ProgressFn(), &stop_flag());
   if (show_progress) std::fprintf(stderr, "\r%80s\r", "");
+  if (!sink.error().empty()) {
+    // the sink stopped the run: what summary.json says (OutputFolder::end)
+    summary.message = sink.error();
+    summary.termination = Termination::OutputFailure;
+  }
   std::printf("%s", brief_report(summary).c_str());
   std::printf("output        %s/\n", dir.c_str());
   if (!summary.complete()) {

@@ -4,6 +4,7 @@
 
 #include "commands.hpp"
 #include "rubdyn/io/case_error.hpp"
+#include "rubdyn/io/output_folder.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"rubdyn: reference solutions for rotor-stator rub with Coulomb friction"};
@@ -25,7 +26,13 @@ int main(int argc, char** argv) {
     return action ? action() : 2;
   } catch (const rubdyn::CaseError& e) {
     std::fprintf(stderr, "%s\n", e.what());
-    return 2;
+    return rubdyn::kExitBadInput;
+  } catch (const rubdyn::FolderError& e) {
+    std::fprintf(stderr, "rubdyn: error: %s (the run did not start)\n", e.what());
+    return rubdyn::kExitBadInput;
+  } catch (const rubdyn::OutputError& e) {
+    std::fprintf(stderr, "rubdyn: error: %s\n", e.what());
+    return rubdyn::kExitOutput;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "rubdyn: error: %s\n", e.what());
     return 2;
