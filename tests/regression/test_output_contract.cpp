@@ -365,3 +365,29 @@ TEST_CASE("Contract: a folder whose old summary cannot be removed is refused bef
   CHECK_FALSE(fs::exists(dir / "case.resolved.toml"));
   fs::remove_all(dir);
 }
+
+// --- Also: options that were silently ignored or defaulted ----------------------------------
+
+TEST_CASE("Contract: an empty --solver and options of the other solver family are refused",
+          "[contract][cli]") {
+  const fs::path dir = fresh_dir("ignored");
+  for (const std::string args : {"--solver ''", "--h 1e-6", "--output-every 3",
+                                 "--solver mj --rtol 1e-8", "--solver mj --method bdf"}) {
+    const Outcome o = cli("run " + sh(kRef) + " --t-end 0.001 " + args + " --out " + sh(dir));
+    INFO(args << ": " << o.err);
+    CHECK(o.code == 2);
+    CHECK_FALSE(fs::exists(dir));
+  }
+  CHECK(has(cli("run " + sh(kRef) + " --solver ''").err, "solver.kind"));
+  CHECK(has(cli("run " + sh(kRef) + " --h 1e-6").err, "--h"));
+}
+
+TEST_CASE("Contract: --help lists every exit code", "[contract][cli]") {
+  const fs::path out = fresh_dir("help");
+  REQUIRE(std::system((std::string(RUBDYN_CLI) + " --help > " + sh(out)).c_str()) == 0);
+  const std::string help = slurp(out);
+  for (const char* code :
+       {"0 complete", "2 bad input", "3 run ended early", "4 interrupted", "5 a write failed"})
+    CHECK(has(help, code));
+  fs::remove(out);
+}
