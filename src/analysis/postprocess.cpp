@@ -422,6 +422,21 @@ std::string verdicts_json(const RunVerdicts& v) {
   return j + "}\n";
 }
 
+std::vector<std::string> analysis_option_problems(const AnalysisOptions& o) {
+  std::vector<std::string> bad;
+  auto rule = [&bad](bool ok, const char* name, double x, const char* text) {
+    if (!ok) bad.push_back(fmt::format("{} = {}: {}", name, x, text));
+  };
+  rule(std::isfinite(o.min_turns) && o.min_turns > 0, "--min-turns", o.min_turns,
+       "must be finite and > 0 (orbit revolutions)");
+  rule(std::isfinite(o.window) && o.window > 0, "--window", o.window,
+       "must be finite and > 0 (spectrogram frame length [s])");
+  rule(o.overlap >= 0 && o.overlap < 1, "--overlap", o.overlap, "must lie in [0, 1)");
+  rule(o.pad >= 1, "--pad", o.pad, "must be >= 1");
+  rule(std::isfinite(o.f_max) && o.f_max > 0, "--fmax", o.f_max, "must be finite and > 0 [Hz]");
+  return bad;
+}
+
 RunVerdicts write_analysis(const RunRecord& r, const AnalysisOptions& o,
                            const std::string& out_dir) {
   namespace fs = std::filesystem;

@@ -3,7 +3,9 @@
 #include <fmt/format.h>
 
 #include <atomic>
+#include <cerrno>
 #include <chrono>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -70,13 +72,21 @@ OneRun run_point(const CaseSpec& spec, const std::string& dir, const AnalysisOpt
   OneRun r;
   try {
     RunSummary s;
+    std::string write_error;
     {
       OutputFolder sink(dir, spec);
       s = simulate(spec, sink);
+      write_error = sink.error();
     }
     r.termination = std::string(to_string(s.termination));
     r.message = s.message;
     r.complete = s.complete();
+    if (!write_error.empty()) {  // what the point's summary.json says (OutputFolder::end)
+      r.termination = std::string(to_string(Termination::OutputFailure));
+      r.message = write_error;
+      r.complete = false;
+      return r;
+    }
     r.wall = s.wall_seconds;
   } catch (const std::exception& e) {  // the output folder could not be written
     r.termination = "error";
@@ -141,16 +151,29 @@ Variation parse_variation(const std::string& text) {
   return v;
 }
 
+namespace {
+/// A decimal integer of at most 9 digits (fits in int), or -1.
+int small_int(const std::string& digits) {
+  return digits.size() <= 9 ? std::stoi(digits) : -1;
+}
+}  // namespace
+
 Shard parse_shard(const std::string& text) {
   static const std::regex re(R"(\s*(\d+)\s*/\s*(\d+)\s*)");
   std::smatch m;
   Shard s;
-  if (!std::regex_match(text, m, re) || (s.index = std::stoi(m[1])) < 1 ||
-      (s.count = std::stoi(m[2])) < s.index) {
+  if (!std::regex_match(text, m, re) || (s.index = small_int(m[1])) < 1 ||
+      (s.count = small_int(m[2])) < s.index) {
     throw std::invalid_argument(
-        fmt::format("--shard '{}': expected i/N with 1 <= i <= N (e.g. 3/8)", text));
+        fmt::format("--shard '{}': expected i/N with 1 <= i <= N <= 999999999 (e.g. 3/8)", text));
   }
   return s;
+}
+
+double sweep_point_count(const std::vector<Variation>& vary) {
+  double n = 1.0;
+  for (const auto& v : vary) n *= static_cast<double>(v.values.size());
+  return n;
 }
 
 std::vector<std::string> SweepPoint::overrides() const {
@@ -217,6 +240,25 @@ std::string sweep_csv(const std::vector<std::string>& keys, const std::vector<Sw
 
 std::vector<SweepRow> run_sweep(const SweepOptions& o) {
   namespace fs = std::filesystem;
+  // every option first: nothing runs (or is allocated for 1e10 points) before all are checked
+  std::vector<std::string> bad = analysis_option_problems(o.analysis);
+  std::set<std::string> seen;
+  for (const auto& v : o.vary)
+    if (!seen.insert(v.key).second)
+      bad.push_back(
+          fmt::format("--vary {}: the key is varied twice (give one list of values)", v.key));
+  if (o.jobs < 1) bad.push_back(fmt::format("jobs = {}: must be >= 1", o.jobs));
+  const double count = sweep_point_count(o.vary);
+  if (count > static_cast<double>(o.max_points))
+    bad.push_back(
+        fmt::format("{:.6g} points, above the limit of {} (give --max-points N to run "
+                    "them)",
+                    count, o.max_points));
+  if (!bad.empty()) {
+    std::string text = "invalid sweep:";
+    for (const auto& b : bad) text += "\n  " + b;
+    throw std::invalid_argument(text);
+  }
   const auto all = sweep_points(o.vary);
   // validate every point first: a bad value stops the sweep before anything is written
   std::vector<CaseSpec> specs;
@@ -238,6 +280,21 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
       for (const auto& x : tight_overrides(specs[i])) sets.push_back(x);
       tight.push_back(load_case(o.case_path, sets));
     }
+  }
+  if (o.plan) {
+    SweepPlan p;
+    p.points = static_cast<long>(all.size());
+    auto add = [&p](const CaseSpec& c) {
+      ++p.runs;
+      p.simulated_seconds += c.run.t_end;
+      const bool every = c.solver.kind != "event" && c.output.every > 0;
+      p.output_rows +=
+          every ? c.run.t_end / c.solver.h / c.output.every : c.run.t_end / c.output.dt;
+    };
+    for (size_t i : mine) add(specs[i]);
+    for (const auto& t : tight) add(t);
+    p.output_bytes = 420.0 * p.output_rows;
+    o.plan(p);
   }
   std::error_code ec;
   fs::create_directories(o.out, ec);
@@ -304,7 +361,9 @@ long merge_sweep_shards(const std::string& out) {
     std::smatch m;
     const std::string name = e.path().filename().string();
     if (!std::regex_match(name, m, re)) continue;
-    const int i = std::stoi(m[1]), n = std::stoi(m[2]);
+    const int i = small_int(m[1]), n = small_int(m[2]);
+    if (i < 1 || n < i)
+      throw std::runtime_error(fmt::format("{}: not a shard i of N with 1 <= i <= N", name));
     if (count >= 0 && n != count)
       throw std::runtime_error(
           fmt::format("{}: shards of {} and of {} sweeps mixed", out, count, n));
@@ -326,7 +385,10 @@ long merge_sweep_shards(const std::string& out) {
     std::smatch m;
     if (!std::regex_search(text, m, tot))
       throw std::runtime_error(side.string() + ": missing or without points_total");
-    const long t = std::stol(m[1]);
+    const std::string digits = m[1];
+    if (digits.size() > 15)
+      throw std::runtime_error(side.string() + ": points_total " + digits + " is not a count");
+    const long t = std::stol(digits);
     if (total >= 0 && t != total)
       throw std::runtime_error(
           fmt::format("{}: points_total {} differs from {} of shard 1", side.string(), t, total));
@@ -341,7 +403,13 @@ long merge_sweep_shards(const std::string& out) {
     while (std::getline(f, line)) {
       ++ln;
       if (line.empty()) continue;
-      const long idx = std::stol(line.substr(0, line.find(',')));
+      const std::string first = line.substr(0, line.find(','));
+      char* end = nullptr;
+      errno = 0;
+      const long idx = std::strtol(first.c_str(), &end, 10);
+      if (first.empty() || *end != '\0' || errno != 0 || idx < 0 || idx >= total)
+        throw std::runtime_error(fmt::format("{}:{}: point index '{}' is not in [0, {})",
+                                             shards[i].string(), ln, first, total));
       if (lines.count(idx))
         throw std::runtime_error(
             fmt::format("{}:{}: point {} appears twice", shards[i].string(), ln, idx));

@@ -82,6 +82,11 @@ struct AnalysisOptions {
   std::optional<double> t0, t1;  ///< analysis window (default: the whole run)
 };
 
+/// Every rule `o` breaks, one message each naming the option (empty: valid): min_turns > 0,
+/// window > 0, overlap in [0, 1), pad >= 1, f_max > 0, all finite. Checked by analyze and by a
+/// sweep before its first point.
+std::vector<std::string> analysis_option_problems(const AnalysisOptions& o);
+
 struct RunVerdicts {
   double t0 = 0, t1 = 0;  ///< the analysed window [s]
   double omega_max = 0, omega_final = 0;
