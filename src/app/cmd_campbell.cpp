@@ -41,8 +41,11 @@ void print_point(const CampbellPoint& p, bool damped) {
 int campbell_command(const CampbellArgs& a) {
   // Every problem with the options and the case is reported at once; nothing is written.
   std::vector<CaseIssue> bad;
-  if (a.points < 2) {
-    bad.push_back({"command line", 0, "--points", std::to_string(a.points), "must be >= 2"});
+  // 1e5 speeds: a 14 x 14 eigenproblem each, seconds of work and a 10 MB CSV; more is a typo
+  constexpr int kMaxPoints = 100'000;
+  if (a.points < 2 || a.points > kMaxPoints) {
+    bad.push_back({"command line", 0, "--points", std::to_string(a.points),
+                   fmt::format("must lie in [2, {}]", kMaxPoints)});
   }
   if (a.omega_max_given && !(std::isfinite(a.omega_max) && a.omega_max > 0.0)) {
     bad.push_back({"command line", 0, "--omega-max", fmt::format("{}", a.omega_max),
@@ -90,7 +93,7 @@ void add_campbell_command(CLI::App& app, Action& action) {
       "whirl-labelled frequencies f1b, f1f, f2b, f2f versus the spin speed, to DIR/campbell.csv");
   add_case_options(*sub, a->c);
   sub->add_option("--out", a->out, "output folder DIR (default: the case's output folder)");
-  sub->add_option("--points", a->points, "number of speeds from 0 to omega-max, >= 2")
+  sub->add_option("--points", a->points, "number of speeds from 0 to omega-max, in [2, 100000]")
       ->capture_default_str();
   auto* om = sub->add_option("--omega-max", a->omega_max,
                              "largest speed [rad/s], > 0 (default: run.omega_lim of the case)");

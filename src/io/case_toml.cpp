@@ -407,6 +407,23 @@ class Loader {
         issue(key, n, n ? node_text(*n) : p.value + " (default)", p.rule);
       }
     }
+    // Output size: at most kMaxOutputRows rows (output.dt = 1e-300 once wrote 117 MB in 5 s on
+    // its way to 1e297 rows; t_end = 1e300 is the same mistake).
+    if (c.run.t_end > 0 && c.output.dt > 0 && so.h > 0) {
+      const bool every = so.kind != "event" && c.output.every > 0;
+      const double rows = every ? c.run.t_end / so.h / c.output.every : c.run.t_end / c.output.dt;
+      if (!(rows <= static_cast<double>(kMaxOutputRows))) {
+        // name the key the user just changed, when it is one of them
+        const std::string key = every                            ? "output.every"
+                                : overridden_.count("run.t_end") ? "run.t_end"
+                                                                 : "output.dt";
+        const toml::node* n = at(key);
+        issue(key, n, n ? node_text(*n) : "(default)",
+              fmt::format("the run would write {:.3g} rows of output (about {:.3g} GB), above "
+                          "the limit of {:.0e} rows; raise output.dt or shorten run.t_end",
+                          rows, rows * 420e-9, static_cast<double>(kMaxOutputRows)));
+      }
+    }
     // The initial state must not penetrate the stator: d_N = g0 - |(x_r - x_s, y_r - y_s)| >= 0.
     if (s.gap > 0) {
       const Vec7& q = c.initial.q0;
@@ -446,14 +463,26 @@ CaseSpec parse_case(std::string_view toml_text, const std::string& source,
 }
 
 CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides) {
+  namespace fs = std::filesystem;
+  auto refuse = [&path](const std::string& why) {
+    throw CaseError({{path, 0, "(file)", "", why}});
+  };
+  std::error_code ec;
+  const auto st = fs::status(path, ec);
+  if (fs::is_directory(st)) refuse("is a directory, not a case file");
+  // a device (/dev/zero), a pipe or a socket may never end: read at most kMaxCaseBytes
   std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    throw CaseError({{path, 0, "(file)", "",
-                      std::string("cannot read the case file: ") + std::strerror(errno)}});
+  if (!in) refuse(std::string("cannot read the case file: ") + std::strerror(errno));
+  std::string text(kMaxCaseBytes + 1, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  if (text.size() > kMaxCaseBytes) {
+    refuse(fmt::format("{} larger than {} bytes: not a case file",
+                       fs::is_regular_file(st) ? "a file" : "a special file (device or pipe)",
+                       kMaxCaseBytes));
   }
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return parse_case(ss.str(), path, overrides);
+  if (text.find('\0') != std::string::npos) refuse("holds NUL bytes: not a text (TOML) file");
+  return parse_case(text, path, overrides);
 }
 
 std::string toml_quote(std::string_view text) {

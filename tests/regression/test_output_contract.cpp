@@ -19,6 +19,7 @@
 
 #include "rubdyn/analysis/compare.hpp"
 #include "rubdyn/analysis/postprocess.hpp"
+#include "rubdyn/analysis/sweep.hpp"
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/model/rotor_stator_model.hpp"
@@ -390,4 +391,79 @@ TEST_CASE("Contract: --help lists every exit code", "[contract][cli]") {
        {"0 complete", "2 bad input", "3 run ended early", "4 interrupted", "5 a write failed"})
     CHECK(has(help, code));
   fs::remove(out);
+}
+
+// --- item 11: a sweep checks every option and its size before the first point ----------------
+
+TEST_CASE("Contract: sweep options are all checked before the first point runs",
+          "[contract][cli]") {
+  const fs::path dir = fresh_dir("sweep");
+  for (const std::string args :
+       {"--vary contact.mu=0:0.2:1000 --vary stator.k=1e6:3e6:1000",      // 1e6 points
+        "--vary contact.mu=0:0.2:100000 --vary stator.k=1e6:3e6:100000",  // 1e10: no bad_alloc
+        "--vary contact.mu=0.1,0.2 --min-turns -1",
+        "--vary contact.mu=0.1,0.2 --vary contact.mu=0.3",  // one key twice
+        "--vary contact.mu=0.1 --shard 99999999999/99999999999"}) {
+    const Outcome o = cli("sweep " + sh(kRef) + " --t-end 0.001 " + args + " --out " + sh(dir));
+    INFO(args << ": " << o.err);
+    CHECK(o.code == 2);
+    CHECK_FALSE(has(o.err, "stoi"));
+    CHECK_FALSE(fs::exists(dir));
+  }
+  // above the limit with --max-points: planned and run (3 points, printed before the first)
+  const fs::path out = fresh_dir("sweep-out");
+  REQUIRE(std::system((std::string(RUBDYN_CLI) + " sweep " + sh(kRef) +
+                       " --t-end 0.001 --vary contact.mu=0.1,0.2,0.3 --max-points 3 --quiet"
+                       " --out " +
+                       sh(dir) + " > " + sh(out))
+                          .c_str()) == 0);
+  CHECK(has(slurp(out), "plan          3 points"));
+  CHECK(cli("sweep " + sh(kRef) +
+            " --t-end 0.001 --vary contact.mu=0.1,0.2,0.3 --max-points 2 "
+            "--out " +
+            sh(dir / "b"))
+            .code == 2);
+  fs::remove_all(dir);
+  fs::remove(out);
+}
+
+TEST_CASE("Contract: sweep-merge names the file and line of a corrupted index", "[contract]") {
+  const fs::path dir = fresh_dir("merge");
+  fs::create_directories(dir);
+  std::ofstream(dir / "sweep-shard-1-of-1.json") << "{\"points_total\": 2}\n";
+  std::ofstream(dir / "sweep-shard-1-of-1.csv") << "point,x\n0,1\nzz,2\n";
+  CHECK_THROWS_WITH(merge_sweep_shards(dir.string()),
+                    Catch::Contains("sweep-shard-1-of-1.csv:3") && Catch::Contains("zz"));
+  fs::remove_all(dir);
+}
+
+// --- Also: case files that are not files, unbounded sizes -------------------------------------
+
+TEST_CASE("Contract: a directory or a device as the case file is refused, sizes are bounded",
+          "[contract][cli]") {
+  Outcome o = cli("check " + sh(fs::temp_directory_path()));
+  CHECK(o.code == 2);
+  CHECK(has(o.err, "is a directory"));
+  o = cli("check /dev/zero");  // never ends: read up to the bound only
+  CHECK(o.code == 2);
+  CHECK(has(o.err, "larger than"));
+  // output size: t_end = 1e300 or output.dt = 1e-300 ask for ~1e300 rows
+  for (const std::string set : {"run.t_end=1e300", "output.dt=1e-300"}) {
+    try {
+      (void)load_case(kRef, {set});
+      FAIL(set << " accepted");
+    } catch (const CaseError& e) {
+      REQUIRE(e.issues().size() == 1);
+      CHECK(e.issues()[0].key == set.substr(0, set.find('=')));
+      CHECK(has(e.issues()[0].rule, "rows"));
+    }
+  }
+  CHECK(cli("campbell " + sh(kRef) + " --points 10000000 --out " + sh(fresh_dir("cb"))).code == 2);
+  CHECK(cli("analyze " + sh(fs::temp_directory_path()) + " --window 0").code == 2);
+  // a fixed-step run that ends deep in the stator says so (h = 5e-3: 0.24 g0 on this case)
+  const fs::path dir = fresh_dir("pen");
+  o = cli("run " + sh(kRef) + " --solver mj --h 5e-3 --t-end 0.01 --quiet --out " + sh(dir));
+  CHECK(o.code == 0);
+  CHECK(has(o.err, "times the clearance"));
+  fs::remove_all(dir);
 }

@@ -14,6 +14,14 @@
 
 namespace rubdyn {
 
+/// Largest number of timeseries rows a case may ask for (t_end / output.dt, or the fixed-step
+/// count / output.every): 1e8 rows are about 42 GB. More is refused as bad input.
+inline constexpr long kMaxOutputRows = 100'000'000;
+
+/// A case file is read up to this size (1 MiB; the reference case is 2 kB): a larger file, or
+/// a device such as /dev/zero, is refused rather than read without end.
+inline constexpr std::size_t kMaxCaseBytes = 1 << 20;
+
 /// Reads, overrides, validates. Throws CaseError (every problem listed) on bad input.
 CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides = {});
 
