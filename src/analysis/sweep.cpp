@@ -68,30 +68,50 @@ struct OneRun {
   RunVerdicts v;
 };
 
-OneRun run_point(const CaseSpec& spec, const std::string& dir, const AnalysisOptions& ao) {
+std::string file_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+/// --resume: the folder holds a complete run of exactly this resolved case.
+bool already_done(const CaseSpec& spec, const std::string& dir) {
+  return file_text(dir + "/summary.json").find("\"complete\": true") != std::string::npos &&
+         file_text(dir + "/case.resolved.toml") == to_toml(spec);
+}
+
+OneRun run_point(const CaseSpec& spec, const std::string& dir, const AnalysisOptions& ao,
+                 bool resume) {
   OneRun r;
-  try {
-    RunSummary s;
-    std::string write_error;
-    {
-      OutputFolder sink(dir, spec);
-      s = simulate(spec, sink);
-      write_error = sink.error();
-    }
-    r.termination = std::string(to_string(s.termination));
-    r.message = s.message;
-    r.complete = s.complete();
-    if (!write_error.empty()) {  // what the point's summary.json says (OutputFolder::end)
-      r.termination = std::string(to_string(Termination::OutputFailure));
-      r.message = write_error;
-      r.complete = false;
+  if (resume && already_done(spec, dir)) {
+    r.termination = std::string(to_string(Termination::Completed));
+    r.message = "resumed: complete in an earlier sweep";
+    r.complete = true;
+  } else {
+    try {
+      RunSummary s;
+      std::string write_error;
+      {
+        OutputFolder sink(dir, spec);
+        s = simulate(spec, sink);
+        write_error = sink.error();
+      }
+      r.termination = std::string(to_string(s.termination));
+      r.message = s.message;
+      r.complete = s.complete();
+      r.wall = s.wall_seconds;
+      if (!write_error.empty()) {  // what the point's summary.json says (OutputFolder::end)
+        r.termination = std::string(to_string(Termination::OutputFailure));
+        r.message = write_error;
+        r.complete = false;
+        return r;
+      }
+    } catch (const std::exception& e) {  // the output folder could not be written
+      r.termination = "error";
+      r.message = e.what();
       return r;
     }
-    r.wall = s.wall_seconds;
-  } catch (const std::exception& e) {  // the output folder could not be written
-    r.termination = "error";
-    r.message = e.what();
-    return r;
   }
   try {
     r.v = write_analysis(read_run(dir), ao);
@@ -286,10 +306,10 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
     p.points = static_cast<long>(all.size());
     auto add = [&p](const CaseSpec& c) {
       ++p.runs;
-      p.simulated_seconds += c.run.t_end;
+      const double span = c.run.t_end - c.run.t_start;
+      p.simulated_seconds += span;
       const bool every = c.solver.kind != "event" && c.output.every > 0;
-      p.output_rows +=
-          every ? c.run.t_end / c.solver.h / c.output.every : c.run.t_end / c.output.dt;
+      p.output_rows += every ? span / c.solver.h / c.output.every : span / c.output.dt;
     };
     for (size_t i : mine) add(specs[i]);
     for (const auto& t : tight) add(t);
@@ -310,14 +330,14 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
       SweepRow& row = rows[k];
       row.point = all[i];
       row.folder = (fs::path(o.out) / fmt::format("p{:04d}", i)).string();
-      const OneRun r = run_point(specs[i], row.folder, o.analysis);
+      const OneRun r = run_point(specs[i], row.folder, o.analysis, o.resume);
       row.termination = r.termination;
       row.message = r.message;
       row.complete = r.complete;
       row.wall_seconds = r.wall;
       row.v = r.v;
       if (o.certify) {
-        const OneRun t = run_point(tight[k], row.folder + "-tight", o.analysis);
+        const OneRun t = run_point(tight[k], row.folder + "-tight", o.analysis, o.resume);
         row.certified_run = true;
         row.tight_termination = t.termination;
         row.tight = t.v;

@@ -21,7 +21,7 @@ struct SweepArgs {
   std::string out = "out/sweep", shard, solver, rtol, atol, h, t_end;
   int jobs = 0;
   long max_points = kDefaultMaxPoints;
-  bool certify = false, quiet = false;
+  bool certify = false, quiet = false, resume = false;
   double min_turns = 1.0;
 };
 
@@ -45,6 +45,7 @@ int sweep_command(const SweepArgs& a) {
   o.analysis.min_turns = a.min_turns;
   if (a.max_points < 1) throw std::invalid_argument("--max-points must be >= 1");
   o.max_points = a.max_points;
+  o.resume = a.resume;
   o.plan = [](const SweepPlan& p) {
     std::printf(
         "plan          %ld points; this run: %ld runs, %.6g s simulated, about %.3g "
@@ -101,6 +102,8 @@ void add_sweep_commands(CLI::App& app, Action& action) {
                   "sustained whirl: orbit revolutions in one run (default 1)");
   sub->add_option("--max-points", a->max_points,
                   "run sweeps of more points than this (default 10000: larger ones are refused)");
+  sub->add_flag("--resume", a->resume,
+                "skip the points whose folder holds a complete run of the same resolved case");
   sub->add_flag("--quiet", a->quiet, "no progress line");
   sub->callback([a, &action] { action = [a] { return sweep_command(*a); }; });
 

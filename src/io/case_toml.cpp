@@ -74,6 +74,7 @@ const std::vector<KeySpec>& schema() {
       const char* name = i == TH ? "omega0" : kVelNames[i];
       num("initial", name, false, [i](CaseSpec& c) { return &c.initial.v0[i]; });
     }
+    num("run", "t_start", false, [](CaseSpec& c) { return &c.run.t_start; });
     num("run", "t_end", true, [](CaseSpec& c) { return &c.run.t_end; });
     num("run", "omega_lim", true, [](CaseSpec& c) { return &c.run.omega_lim; });
     text("solver", "kind", [](CaseSpec& c) { return &c.solver.kind; });
@@ -353,7 +354,12 @@ class Loader {
     rule(k.e_t >= 0 && k.e_t <= 1, "contact.e_t", k.e_t, "must lie in [0, 1] (a restitution)");
     rule(c.params.loads.gravity >= 0, "loads.gravity", c.params.loads.gravity,
          "must be >= 0 (its direction is fixed: -Y)");
+    rule(c.run.t_start >= 0, "run.t_start", c.run.t_start, "must be >= 0");
     rule(c.run.t_end > 0, "run.t_end", c.run.t_end, "must be > 0");
+    if (c.run.t_end > 0 && c.run.t_start >= 0) {
+      rule(c.run.t_end > c.run.t_start, "run.t_end", c.run.t_end,
+           fmt::format("must be > run.t_start = {:.17g}", c.run.t_start));
+    }
     rule(c.run.omega_lim > 0, "run.omega_lim", c.run.omega_lim, "must be > 0");
     const auto& so = c.solver;
     static const std::vector<std::string> kinds = {"event", "carp-onevc", "carp-qn", "mj",
@@ -394,7 +400,8 @@ class Loader {
       fo.output_dt = c.output.dt;
       auto bad = fixed_step_option_problems(fo);
       if (so.kind != "event") {
-        for (auto& p : fixed_step_count_problems(fo.h, 0.0, c.run.t_end)) bad.push_back(p);
+        for (auto& p : fixed_step_count_problems(fo.h, c.run.t_start, c.run.t_end))
+          bad.push_back(p);
       }
       static const std::map<std::string, std::string> key_of = {
           {"h", "solver.h"},          {"itmax", "solver.itmax"},       {"qn_tol", "solver.qn_tol"},
@@ -402,16 +409,17 @@ class Loader {
           {"output_dt", "output.dt"}, {"output_every", "output.every"}};
       for (const auto& p : bad) {
         const std::string& key = key_of.at(p.option);
-        if (key == "run.t_end" && !(c.run.t_end > 0)) continue;  // reported below as > 0
+        if (key == "run.t_end" && !(c.run.t_end > c.run.t_start)) continue;  // reported above
         const toml::node* n = at(key);
         issue(key, n, n ? node_text(*n) : p.value + " (default)", p.rule);
       }
     }
     // Output size: at most kMaxOutputRows rows (output.dt = 1e-300 once wrote 117 MB in 5 s on
     // its way to 1e297 rows; t_end = 1e300 is the same mistake).
-    if (c.run.t_end > 0 && c.output.dt > 0 && so.h > 0) {
+    if (c.run.t_end > c.run.t_start && c.output.dt > 0 && so.h > 0) {
       const bool every = so.kind != "event" && c.output.every > 0;
-      const double rows = every ? c.run.t_end / so.h / c.output.every : c.run.t_end / c.output.dt;
+      const double span = c.run.t_end - c.run.t_start;
+      const double rows = every ? span / so.h / c.output.every : span / c.output.dt;
       if (!(rows <= static_cast<double>(kMaxOutputRows))) {
         // name the key the user just changed, when it is one of them
         const std::string key = every                            ? "output.every"

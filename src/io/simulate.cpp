@@ -14,6 +14,7 @@ RunSummary simulate(const CaseSpec& spec, OutputSink& sink, const ProgressFn& pr
   MechanicalState s0;
   s0.q = spec.initial.q0;
   s0.v = spec.initial.v0;
+  s0.t = spec.run.t_start;
   if (spec.solver.kind == "event") {
     EventDrivenOptions opt;
     opt.rtol = spec.solver.rtol;

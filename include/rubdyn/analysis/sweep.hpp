@@ -73,6 +73,9 @@ struct SweepOptions {
   AnalysisOptions analysis;
   /// Called (from worker threads, serialised) after each point with (done, total).
   std::function<void(long, long)> progress;
+  /// Skip the points whose folder holds a complete summary.json of the same resolved case
+  /// (case.resolved.toml equal to this point's): their analysis is redone, not their run.
+  bool resume = false;
   long max_points = kDefaultMaxPoints;  ///< more points are refused (std::invalid_argument)
   /// Called once every option and point is checked, before the first point runs.
   std::function<void(const SweepPlan&)> plan;
