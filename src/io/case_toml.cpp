@@ -194,7 +194,9 @@ class Loader {
       const auto dot = lhs.find('.');
       if (eq == std::string::npos || dot == std::string::npos || dot == 0 ||
           dot + 1 == lhs.size()) {
-        issues_.push_back({"--set", 0, lhs, "", "an override must read section.key=value"});
+        // (an empty --set '' has no key to name: the text itself is shown)
+        issues_.push_back({"--set", 0, lhs.empty() ? "(override)" : lhs, "\"" + ov + "\"",
+                           "an override must read section.key=value"});
         continue;
       }
       const std::string section = lhs.substr(0, dot), key = lhs.substr(dot + 1);
