@@ -1,6 +1,7 @@
 """Helpers shared by the validation scripts: running rubdyn into an output folder and reading
 it back, and naming the machine a table was measured on."""
 import csv
+import io
 import json
 import math
 import os
@@ -32,15 +33,27 @@ def read_output(folder, dt=1e-4, last=False):
     with open(os.path.join(folder, "summary.json")) as f:
         summary = json.load(f)
     grid = {}
-    with open(os.path.join(folder, "timeseries.csv")) as f:
-        for r in csv.DictReader(f):
-            t = float(r["t"])
-            k = round(t / dt)
-            if abs(t - k * dt) < 1e-9 and (last or k not in grid):
-                grid[k] = {c: float(v) for c, v in r.items() if c != "phase"}
-    with open(os.path.join(folder, "events.csv")) as f:
-        events = [(float(r["t"]), r["kind"]) for r in csv.DictReader(f)]
+    for r in read_rows(os.path.join(folder, "timeseries.csv")):
+        t = float(r["t"])
+        k = round(t / dt)
+        if abs(t - k * dt) < 1e-9 and (last or k not in grid):
+            grid[k] = {c: float(v) for c, v in r.items() if c != "phase"}
+    events = [(float(r["t"]), r["kind"]) for r in read_rows(os.path.join(folder, "events.csv"))]
     return summary, grid, events
+
+
+def read_rows(path):
+    """The rows of a CSV file written by rubdyn, as dicts. rubdyn ends every row with a line end:
+    a last row without one was cut by a kill (it may hold a truncated number) and is dropped
+    with a warning on stderr. An empty file (a killed run of an older rubdyn) has no rows."""
+    with open(path, newline="") as f:
+        text = f.read()
+    if text and not text.endswith("\n"):
+        cut = text.rfind("\n") + 1
+        print("warning: %s: the last row has no line end (the run was cut short): ignored" % path,
+              file=sys.stderr)
+        text = text[:cut]
+    return list(csv.DictReader(io.StringIO(text)))
 
 
 def run_case(rubdyn, folder, args, dt=1e-4):

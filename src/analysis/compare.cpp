@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -68,6 +69,10 @@ Series read_series(const std::string& path) {
   while (std::getline(in, line)) {
     ++lineno;
     if (line.empty()) continue;
+    if (in.eof()) {  // no line end: cut short
+      s.warnings.push_back(cut_row_warning(file, lineno));
+      break;
+    }
     const auto f = split_csv_line(line);
     if (f.size() != header.size()) {
       throw std::runtime_error(fmt::format("{}:{}: {} fields, the header has {}", file, lineno,
@@ -112,7 +117,8 @@ std::vector<TimedEvent> read_events(const std::string& path) {
   std::ifstream in(file);
   if (!in) return out;
   std::string line;
-  std::getline(in, line);
+  // a killed run of an old rubdyn left it empty (the header was still buffered): no events
+  if (!std::getline(in, line)) return out;
   const auto header = split_csv_line(line);
   int tc = -1, kc = -1;
   for (std::size_t c = 0; c < header.size(); ++c) {
@@ -125,6 +131,7 @@ std::vector<TimedEvent> read_events(const std::string& path) {
   while (std::getline(in, line)) {
     ++lineno;
     if (line.empty()) continue;
+    if (in.eof()) break;  // no line end: cut short (the time series reader warns)
     const auto f = split_csv_line(line);
     double t;
     if (static_cast<int>(f.size()) <= std::max(tc, kc) || !parse_number(f[tc], t)) {
@@ -171,6 +178,12 @@ Comparison compare_solutions(const Series& a, const Series& b, const std::vector
     double integral = 0.0, prev_e2 = 0.0;
     for (std::size_t i = 0; i < times.size(); ++i) {
       const double e = interpolate(a.t, *va, times[i]) - interpolate(b.t, *vb, times[i]);
+      if (!std::isfinite(e)) {
+        // a NaN would drop out of every comparison below (sup 0, rms nan): it is a difference
+        if (d.non_finite++ == 0) d.t_sup = times[i];
+        d.sup = std::numeric_limits<double>::infinity();
+        continue;
+      }
       if (std::abs(e) > d.sup) {
         d.sup = std::abs(e);
         d.t_sup = times[i];
@@ -179,7 +192,15 @@ Comparison compare_solutions(const Series& a, const Series& b, const std::vector
       prev_e2 = e * e;
     }
     d.rms = times.size() > 1 ? std::sqrt(integral / (times.back() - times.front())) : d.sup;
+    if (d.non_finite > 0) d.rms = std::numeric_limits<double>::infinity();
     c.columns.push_back(d);
+  }
+  if (c.columns.empty()) {
+    std::string names;
+    for (const char* n : kStandard) names += (names.empty() ? "" : ", ") + std::string(n);
+    throw std::runtime_error(
+        fmt::format("nothing to compare: {} and {} have none of the columns {} in common", a.source,
+                    b.source, names));
   }
   // events: greedy matching in time order per kind, inside the window
   auto in_window = [&](const TimedEvent& e) {
@@ -218,8 +239,11 @@ std::string comparison_json(const Comparison& c, const std::string& a, const std
       q(a), q(b), c.t0, c.t1, c.points);
   for (std::size_t i = 0; i < c.columns.size(); ++i) {
     const auto& d = c.columns[i];
-    j += fmt::format("{}\n    \"{}\": {{\"sup\": {:.17g}, \"rms\": {:.17g}, \"t_sup\": {:.17g}}}",
-                     i ? "," : "", d.name, d.sup, d.rms, d.t_sup);
+    // JSON has no infinity: a non-finite difference is written as null (and counted)
+    auto num = [](double x) { return std::isfinite(x) ? fmt::format("{:.17g}", x) : "null"; };
+    j += fmt::format(
+        "{}\n    \"{}\": {{\"sup\": {}, \"rms\": {}, \"t_sup\": {:.17g}, \"non_finite\": {}}}",
+        i ? "," : "", d.name, num(d.sup), num(d.rms), d.t_sup, d.non_finite);
   }
   j += "\n  },\n  \"missing_columns\": [";
   for (std::size_t i = 0; i < c.missing.size(); ++i) j += (i ? ", " : "") + q(c.missing[i]);
@@ -248,8 +272,14 @@ std::string comparison_report(const Comparison& c, const std::string& a, const s
       "compare  a = {}\n         b = {}\nwindow   [{:.9g}, {:.9g}] s, {} sample times\n", a, b,
       c.t0, c.t1, c.points);
   r += fmt::format("{:<8} {:>14} {:>14} {:>14}\n", "column", "sup |a - b|", "rms", "at t [s]");
-  for (const auto& d : c.columns)
+  for (const auto& d : c.columns) {
     r += fmt::format("{:<8} {:>14.6e} {:>14.6e} {:>14.9g}\n", d.name, d.sup, d.rms, d.t_sup);
+    if (d.non_finite > 0)
+      r += fmt::format(
+          "{:<8} {} sample times where a - b is not finite (NaN or inf), first at "
+          "t = {:.9g} s\n",
+          "", d.non_finite, d.t_sup);
+  }
   if (!c.missing.empty()) {
     r += "not compared (absent from one side):";
     for (const auto& m : c.missing) r += " " + m;

@@ -217,6 +217,10 @@ RunRecord read_run(const std::string& dir) {
   while (std::getline(f, line)) {
     ++ln;
     if (line.empty()) continue;
+    if (f.eof()) {  // no line end: cut short
+      r.warnings.push_back(cut_row_warning(ts_path, ln));
+      break;
+    }
     const auto v = split_csv_line(line);
     if (v.size() != header.size()) {
       throw std::runtime_error(
@@ -242,9 +246,11 @@ RunRecord read_run(const std::string& dir) {
   }
   std::ifstream ev((fs::path(dir) / "events.csv").string());
   if (ev) {
-    std::getline(ev, line);
+    if (!std::getline(ev, line)) {
+      r.warnings.push_back(dir + "/events.csv: empty (no header): read as no events");
+    }
     while (std::getline(ev, line))
-      if (!line.empty()) ++r.events;
+      if (!line.empty() && !ev.eof()) ++r.events;  // a row without line end was cut short
   }
   std::ifstream sj((fs::path(dir) / "summary.json").string());
   std::string text((std::istreambuf_iterator<char>(sj)), std::istreambuf_iterator<char>());
@@ -414,6 +420,21 @@ std::string verdicts_json(const RunVerdicts& v) {
   field("min_dN_over_g0", num_json(v.min_dN_over_g0));
   field("events", fmt::format("{}", v.events), true);
   return j + "}\n";
+}
+
+std::vector<std::string> analysis_option_problems(const AnalysisOptions& o) {
+  std::vector<std::string> bad;
+  auto rule = [&bad](bool ok, const char* name, double x, const char* text) {
+    if (!ok) bad.push_back(fmt::format("{} = {}: {}", name, x, text));
+  };
+  rule(std::isfinite(o.min_turns) && o.min_turns > 0, "--min-turns", o.min_turns,
+       "must be finite and > 0 (orbit revolutions)");
+  rule(std::isfinite(o.window) && o.window > 0, "--window", o.window,
+       "must be finite and > 0 (spectrogram frame length [s])");
+  rule(o.overlap >= 0 && o.overlap < 1, "--overlap", o.overlap, "must lie in [0, 1)");
+  rule(o.pad >= 1, "--pad", o.pad, "must be >= 1");
+  rule(std::isfinite(o.f_max) && o.f_max > 0, "--fmax", o.f_max, "must be finite and > 0 [Hz]");
+  return bad;
 }
 
 RunVerdicts write_analysis(const RunRecord& r, const AnalysisOptions& o,

@@ -3,7 +3,9 @@
 #include <fmt/format.h>
 
 #include <atomic>
+#include <cerrno>
 #include <chrono>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -66,22 +68,50 @@ struct OneRun {
   RunVerdicts v;
 };
 
-OneRun run_point(const CaseSpec& spec, const std::string& dir, const AnalysisOptions& ao) {
+std::string file_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+/// --resume: the folder holds a complete run of exactly this resolved case.
+bool already_done(const CaseSpec& spec, const std::string& dir) {
+  return file_text(dir + "/summary.json").find("\"complete\": true") != std::string::npos &&
+         file_text(dir + "/case.resolved.toml") == to_toml(spec);
+}
+
+OneRun run_point(const CaseSpec& spec, const std::string& dir, const AnalysisOptions& ao,
+                 bool resume) {
   OneRun r;
-  try {
-    RunSummary s;
-    {
-      OutputFolder sink(dir, spec);
-      s = simulate(spec, sink);
+  if (resume && already_done(spec, dir)) {
+    r.termination = std::string(to_string(Termination::Completed));
+    r.message = "resumed: complete in an earlier sweep";
+    r.complete = true;
+  } else {
+    try {
+      RunSummary s;
+      std::string write_error;
+      {
+        OutputFolder sink(dir, spec);
+        s = simulate(spec, sink);
+        write_error = sink.error();
+      }
+      r.termination = std::string(to_string(s.termination));
+      r.message = s.message;
+      r.complete = s.complete();
+      r.wall = s.wall_seconds;
+      if (!write_error.empty()) {  // what the point's summary.json says (OutputFolder::end)
+        r.termination = std::string(to_string(Termination::OutputFailure));
+        r.message = write_error;
+        r.complete = false;
+        return r;
+      }
+    } catch (const std::exception& e) {  // the output folder could not be written
+      r.termination = "error";
+      r.message = e.what();
+      return r;
     }
-    r.termination = std::string(to_string(s.termination));
-    r.message = s.message;
-    r.complete = s.complete();
-    r.wall = s.wall_seconds;
-  } catch (const std::exception& e) {  // the output folder could not be written
-    r.termination = "error";
-    r.message = e.what();
-    return r;
   }
   try {
     r.v = write_analysis(read_run(dir), ao);
@@ -141,16 +171,29 @@ Variation parse_variation(const std::string& text) {
   return v;
 }
 
+namespace {
+/// A decimal integer of at most 9 digits (fits in int), or -1.
+int small_int(const std::string& digits) {
+  return digits.size() <= 9 ? std::stoi(digits) : -1;
+}
+}  // namespace
+
 Shard parse_shard(const std::string& text) {
   static const std::regex re(R"(\s*(\d+)\s*/\s*(\d+)\s*)");
   std::smatch m;
   Shard s;
-  if (!std::regex_match(text, m, re) || (s.index = std::stoi(m[1])) < 1 ||
-      (s.count = std::stoi(m[2])) < s.index) {
+  if (!std::regex_match(text, m, re) || (s.index = small_int(m[1])) < 1 ||
+      (s.count = small_int(m[2])) < s.index) {
     throw std::invalid_argument(
-        fmt::format("--shard '{}': expected i/N with 1 <= i <= N (e.g. 3/8)", text));
+        fmt::format("--shard '{}': expected i/N with 1 <= i <= N <= 999999999 (e.g. 3/8)", text));
   }
   return s;
+}
+
+double sweep_point_count(const std::vector<Variation>& vary) {
+  double n = 1.0;
+  for (const auto& v : vary) n *= static_cast<double>(v.values.size());
+  return n;
 }
 
 std::vector<std::string> SweepPoint::overrides() const {
@@ -217,6 +260,25 @@ std::string sweep_csv(const std::vector<std::string>& keys, const std::vector<Sw
 
 std::vector<SweepRow> run_sweep(const SweepOptions& o) {
   namespace fs = std::filesystem;
+  // every option first: nothing runs (or is allocated for 1e10 points) before all are checked
+  std::vector<std::string> bad = analysis_option_problems(o.analysis);
+  std::set<std::string> seen;
+  for (const auto& v : o.vary)
+    if (!seen.insert(v.key).second)
+      bad.push_back(
+          fmt::format("--vary {}: the key is varied twice (give one list of values)", v.key));
+  if (o.jobs < 1) bad.push_back(fmt::format("jobs = {}: must be >= 1", o.jobs));
+  const double count = sweep_point_count(o.vary);
+  if (count > static_cast<double>(o.max_points))
+    bad.push_back(
+        fmt::format("{:.6g} points, above the limit of {} (give --max-points N to run "
+                    "them)",
+                    count, o.max_points));
+  if (!bad.empty()) {
+    std::string text = "invalid sweep:";
+    for (const auto& b : bad) text += "\n  " + b;
+    throw std::invalid_argument(text);
+  }
   const auto all = sweep_points(o.vary);
   // validate every point first: a bad value stops the sweep before anything is written
   std::vector<CaseSpec> specs;
@@ -239,6 +301,21 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
       tight.push_back(load_case(o.case_path, sets));
     }
   }
+  if (o.plan) {
+    SweepPlan p;
+    p.points = static_cast<long>(all.size());
+    auto add = [&p](const CaseSpec& c) {
+      ++p.runs;
+      const double span = c.run.t_end - c.run.t_start;
+      p.simulated_seconds += span;
+      const bool every = c.solver.kind != "event" && c.output.every > 0;
+      p.output_rows += every ? span / c.solver.h / c.output.every : span / c.output.dt;
+    };
+    for (size_t i : mine) add(specs[i]);
+    for (const auto& t : tight) add(t);
+    p.output_bytes = 420.0 * p.output_rows;
+    o.plan(p);
+  }
   std::error_code ec;
   fs::create_directories(o.out, ec);
   if (ec) throw std::runtime_error("cannot create " + o.out + ": " + ec.message());
@@ -253,14 +330,14 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
       SweepRow& row = rows[k];
       row.point = all[i];
       row.folder = (fs::path(o.out) / fmt::format("p{:04d}", i)).string();
-      const OneRun r = run_point(specs[i], row.folder, o.analysis);
+      const OneRun r = run_point(specs[i], row.folder, o.analysis, o.resume);
       row.termination = r.termination;
       row.message = r.message;
       row.complete = r.complete;
       row.wall_seconds = r.wall;
       row.v = r.v;
       if (o.certify) {
-        const OneRun t = run_point(tight[k], row.folder + "-tight", o.analysis);
+        const OneRun t = run_point(tight[k], row.folder + "-tight", o.analysis, o.resume);
         row.certified_run = true;
         row.tight_termination = t.termination;
         row.tight = t.v;
@@ -304,7 +381,9 @@ long merge_sweep_shards(const std::string& out) {
     std::smatch m;
     const std::string name = e.path().filename().string();
     if (!std::regex_match(name, m, re)) continue;
-    const int i = std::stoi(m[1]), n = std::stoi(m[2]);
+    const int i = small_int(m[1]), n = small_int(m[2]);
+    if (i < 1 || n < i)
+      throw std::runtime_error(fmt::format("{}: not a shard i of N with 1 <= i <= N", name));
     if (count >= 0 && n != count)
       throw std::runtime_error(
           fmt::format("{}: shards of {} and of {} sweeps mixed", out, count, n));
@@ -326,7 +405,10 @@ long merge_sweep_shards(const std::string& out) {
     std::smatch m;
     if (!std::regex_search(text, m, tot))
       throw std::runtime_error(side.string() + ": missing or without points_total");
-    const long t = std::stol(m[1]);
+    const std::string digits = m[1];
+    if (digits.size() > 15)
+      throw std::runtime_error(side.string() + ": points_total " + digits + " is not a count");
+    const long t = std::stol(digits);
     if (total >= 0 && t != total)
       throw std::runtime_error(
           fmt::format("{}: points_total {} differs from {} of shard 1", side.string(), t, total));
@@ -341,7 +423,13 @@ long merge_sweep_shards(const std::string& out) {
     while (std::getline(f, line)) {
       ++ln;
       if (line.empty()) continue;
-      const long idx = std::stol(line.substr(0, line.find(',')));
+      const std::string first = line.substr(0, line.find(','));
+      char* end = nullptr;
+      errno = 0;
+      const long idx = std::strtol(first.c_str(), &end, 10);
+      if (first.empty() || *end != '\0' || errno != 0 || idx < 0 || idx >= total)
+        throw std::runtime_error(fmt::format("{}:{}: point index '{}' is not in [0, {})",
+                                             shards[i].string(), ln, first, total));
       if (lines.count(idx))
         throw std::runtime_error(
             fmt::format("{}:{}: point {} appears twice", shards[i].string(), ln, idx));

@@ -3,6 +3,8 @@
 // repeatable override `--set section.key=value` (one override per occurrence, applied in order).
 // load_case(args.path, args.sets) then reads, overrides and validates (io/case_io.hpp).
 #include <CLI/CLI.hpp>
+#include <atomic>
+#include <csignal>
 #include <string>
 #include <vector>
 
@@ -20,6 +22,25 @@ inline void add_case_options(CLI::App& sub, CaseArgs& a) {
   sub.add_option("--set", a.sets, "override a case key (repeatable), e.g. --set contact.mu=0.2")
       ->type_name("SECTION.KEY=VALUE")
       ->allow_extra_args(false);
+}
+
+/// The flag raised by SIGINT and SIGTERM (a lock-free atomic: safe to set in a handler).
+inline std::atomic<bool>& stop_flag() {
+  static std::atomic<bool> flag{false};
+  return flag;
+}
+
+/// SIGINT and SIGTERM raise stop_flag() instead of killing the process, so that a run ends at
+/// its next output sample and writes its summary ("interrupted", exit 4). The handler is reset
+/// on the first signal: a second one kills the process as usual.
+inline void stop_on_signals() {
+  static_assert(std::atomic<bool>::is_always_lock_free);
+  struct sigaction sa {};
+  sa.sa_handler = [](int) { stop_flag().store(true); };
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESETHAND;
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
 }
 
 }  // namespace rubdyn::app

@@ -25,8 +25,14 @@ int analyze_command(const AnalyzeArgs& a) {
     o.t0 = a.window_t[0];
     o.t1 = a.window_t[1];
   }
-  if (!(o.f_max > 0.0)) throw std::runtime_error("--fmax must be > 0");
+  const auto bad = analysis_option_problems(o);
+  if (!bad.empty()) {
+    std::string text = "invalid options:";
+    for (const auto& b : bad) text += "\n  " + b;
+    throw std::invalid_argument(text);
+  }
   const RunRecord r = read_run(a.folder);
+  for (const auto& w : r.warnings) std::fprintf(stderr, "rubdyn analyze: warning: %s\n", w.c_str());
   const RunVerdicts v = write_analysis(r, o, a.out);
   std::printf("%s", verdicts_json(v).c_str());
   if (!r.complete) std::fprintf(stderr, "rubdyn analyze: note: the run is incomplete\n");

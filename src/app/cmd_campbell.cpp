@@ -14,6 +14,7 @@
 #include "rubdyn/analysis/campbell.hpp"
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/text_files.hpp"
 
 namespace rubdyn::app {
 
@@ -40,8 +41,11 @@ void print_point(const CampbellPoint& p, bool damped) {
 int campbell_command(const CampbellArgs& a) {
   // Every problem with the options and the case is reported at once; nothing is written.
   std::vector<CaseIssue> bad;
-  if (a.points < 2) {
-    bad.push_back({"command line", 0, "--points", std::to_string(a.points), "must be >= 2"});
+  // 1e5 speeds: a 14 x 14 eigenproblem each, seconds of work and a 10 MB CSV; more is a typo
+  constexpr int kMaxPoints = 100'000;
+  if (a.points < 2 || a.points > kMaxPoints) {
+    bad.push_back({"command line", 0, "--points", std::to_string(a.points),
+                   fmt::format("must lie in [2, {}]", kMaxPoints)});
   }
   if (a.omega_max_given && !(std::isfinite(a.omega_max) && a.omega_max > 0.0)) {
     bad.push_back({"command line", 0, "--omega-max", fmt::format("{}", a.omega_max),
@@ -61,11 +65,7 @@ int campbell_command(const CampbellArgs& a) {
   const std::string dir = a.out.empty() ? output_folder(spec) : a.out;
   std::filesystem::create_directories(dir);
   const std::string path = (std::filesystem::path(dir) / "campbell.csv").string();
-  {
-    std::ofstream f(path);
-    f << campbell_csv(d);
-    if (!f) throw std::runtime_error("cannot write " + path);
-  }
+  write_file_atomic(path, campbell_csv(d));  // every write checked, close included
 
   const CampbellSolver solver(spec.params, a.damped);
   std::printf("Campbell diagram of %s: coupled rotor + stator, %s, %d speeds from 0 to %g rad/s\n",
@@ -93,7 +93,7 @@ void add_campbell_command(CLI::App& app, Action& action) {
       "whirl-labelled frequencies f1b, f1f, f2b, f2f versus the spin speed, to DIR/campbell.csv");
   add_case_options(*sub, a->c);
   sub->add_option("--out", a->out, "output folder DIR (default: the case's output folder)");
-  sub->add_option("--points", a->points, "number of speeds from 0 to omega-max, >= 2")
+  sub->add_option("--points", a->points, "number of speeds from 0 to omega-max, in [2, 100000]")
       ->capture_default_str();
   auto* om = sub->add_option("--omega-max", a->omega_max,
                              "largest speed [rad/s], > 0 (default: run.omega_lim of the case)");

@@ -6,6 +6,7 @@
 
 #include "commands.hpp"
 #include "rubdyn/analysis/compare.hpp"
+#include "rubdyn/io/text_files.hpp"
 
 namespace rubdyn::app {
 
@@ -23,15 +24,14 @@ int compare_command(const CompareArgs& x) {
   }
   if (!(x.event_tol > 0.0)) throw std::runtime_error("--event-tol must be > 0");
   const Series a = read_series(x.a), b = read_series(x.b);
+  for (const auto* s : {&a, &b})
+    for (const auto& w : s->warnings)
+      std::fprintf(stderr, "rubdyn compare: warning: %s\n", w.c_str());
   std::optional<std::pair<double, double>> w;
   if (!x.window.empty()) w = std::make_pair(x.window[0], x.window[1]);
   const Comparison c = compare_solutions(a, b, read_events(x.a), read_events(x.b), w, x.event_tol);
   std::printf("%s", comparison_report(c, x.a, x.b).c_str());
-  if (!x.json.empty()) {
-    std::ofstream out(x.json);
-    out << comparison_json(c, x.a, x.b);
-    if (!out) throw std::runtime_error("cannot write " + x.json);
-  }
+  if (!x.json.empty()) write_file_atomic(x.json, comparison_json(c, x.a, x.b));  // checked
   return 0;
 }
 

@@ -3,15 +3,22 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "rubdyn/analysis/postprocess.hpp"
 #include "rubdyn/core/report.hpp"
+#include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/output_folder.hpp"
 #include "rubdyn/io/simulate.hpp"
@@ -22,26 +29,111 @@ namespace {
 
 struct RunArgs {
   CaseArgs c;  // CASE and --set
-  // kept as text: they become overrides of case keys and are validated (and reported) as such
-  std::string solver, method, out, rtol, atol, t_end, h, output_every;
+  // kept as text: they become overrides of case keys and are validated (and reported) as such;
+  // unset when not given (an empty --solver '' is given, and rejected as a kind)
+  std::optional<std::string> solver, method, out, rtol, atol, t_end, h, output_every;
+  std::optional<std::string> from, at;  // restart: output folder of another run, sample time
   bool quiet = false;
 };
 
+/// The overrides that start a run from a sample of the output folder `from`: run.t_start and
+/// every initial.* key, written in the shortest form that reads back to the same double (the
+/// samples carry 17 significant digits, so the state is exact). The sample is the one at `at`
+/// (the last of the rows at that time: after an event) or the last complete one.
+std::vector<std::string> restart_overrides(const std::string& from,
+                                           const std::optional<std::string>& at) {
+  const RunRecord r = read_run(from);
+  for (const auto& w : r.warnings) std::fprintf(stderr, "rubdyn run: warning: %s\n", w.c_str());
+  if (r.samples.empty()) throw std::runtime_error("--from " + from + ": no samples to start from");
+  const Sample* s = &r.samples.back();
+  if (at) {
+    char* end = nullptr;
+    const double T = std::strtod(at->c_str(), &end);
+    if (at->empty() || *end != '\0' || !std::isfinite(T))
+      throw CaseError({{"command line", 0, "--at", *at, "must be a finite time [s]"}});
+    // a time typed in decimal (0.01) and a grid time t0 + k dt (0.010000000000000002) differ
+    // by a few ulps: 1e-12 relative matches them and no two distinct samples
+    const double tol = 1e-12 * std::max(1.0, std::abs(T));
+    s = nullptr;
+    for (const auto& x : r.samples)
+      if (std::abs(x.t - T) <= tol) s = &x;
+    if (!s) {
+      const Sample* before = nullptr;
+      for (const auto& x : r.samples)
+        if (x.t < T) before = &x;
+      throw CaseError(
+          {{"command line", 0, "--at", *at,
+            fmt::format("no sample of {} at this time (samples from {:.17g} to {:.17g} s{})", from,
+                        r.samples.front().t, r.samples.back().t,
+                        before ? fmt::format("; the last before it is at {:.17g} s", before->t)
+                               : std::string())}});
+    }
+  } else if (!r.complete) {
+    std::fprintf(stderr,
+                 "rubdyn run: note: %s is incomplete; starting from its last sample, t = %.17g s\n",
+                 from.c_str(), s->t);
+  }
+  std::vector<std::string> sets = {fmt::format("run.t_start={}", s->t)};
+  for (int i = 0; i < kNumDofs; ++i) {
+    sets.push_back(fmt::format("initial.{}={}", kDofNames[i], s->q[i]));
+    sets.push_back(fmt::format("initial.{}={}", i == TH ? "omega0" : kVelNames[i], s->v[i]));
+  }
+  return sets;
+}
+
 int run_command(const RunArgs& a) {
   // Command-line solver options are overrides of the case's keys: validated like the file.
-  std::vector<std::string> sets = a.c.sets;
-  if (!a.solver.empty()) sets.push_back("solver.kind=" + a.solver);
-  if (!a.method.empty()) sets.push_back("solver.method=" + a.method);
-  if (!a.rtol.empty()) sets.push_back("solver.rtol=" + a.rtol);
-  if (!a.atol.empty()) sets.push_back("solver.atol=" + a.atol);
-  if (!a.h.empty()) sets.push_back("solver.h=" + a.h);
-  if (!a.t_end.empty()) sets.push_back("run.t_end=" + a.t_end);
-  if (!a.output_every.empty()) sets.push_back("output.every=" + a.output_every);
-  if (!a.out.empty()) sets.push_back("output.folder=\"" + a.out + "\"");
-  const CaseSpec spec = load_case(a.c.path, sets);  // throws CaseError: exit 2, nothing written
+  // a restart's state first: an explicit --set of the same key wins
+  std::vector<std::string> sets;
+  if (a.from) sets = restart_overrides(*a.from, a.at);
+  sets.insert(sets.end(), a.c.sets.begin(), a.c.sets.end());
+  if (a.solver) sets.push_back("solver.kind=" + toml_quote(*a.solver));
+  if (a.method) sets.push_back("solver.method=" + toml_quote(*a.method));
+  if (a.rtol) sets.push_back("solver.rtol=" + *a.rtol);
+  if (a.atol) sets.push_back("solver.atol=" + *a.atol);
+  if (a.h) sets.push_back("solver.h=" + *a.h);
+  if (a.t_end) sets.push_back("run.t_end=" + *a.t_end);
+  if (a.output_every) sets.push_back("output.every=" + *a.output_every);
+  // a path is a string as given, never TOML text ('run\new' is not run<newline>ew)
+  if (a.out) sets.push_back("output.folder=" + toml_quote(*a.out));
+  std::vector<CaseIssue> bad;
+  CaseSpec spec;
+  try {
+    spec = load_case(a.c.path, sets);
+  } catch (const CaseError& e) {
+    bad = e.issues();
+  }
+  // options of the other family of solvers would be silently ignored: refused
+  if (bad.empty() && spec.solver.kind == "event") {
+    if (a.h)
+      bad.push_back({"command line", 0, "--h", *a.h,
+                     "applies to the fixed-step schemes only; the event solver has no step "
+                     "(give --solver mj, carp-onevc, ... or drop --h)"});
+    if (a.output_every)
+      bad.push_back({"command line", 0, "--output-every", *a.output_every,
+                     "applies to the fixed-step schemes only; the event solver writes every "
+                     "output.dt"});
+  }
+  if (bad.empty() && spec.solver.kind != "event") {
+    for (const auto& [given, name] : {std::pair{a.rtol, "--rtol"}, std::pair{a.atol, "--atol"},
+                                      std::pair{a.method, "--method"}})
+      if (given)
+        bad.push_back(
+            {"command line", 0, name, *given,
+             "applies to the event solver only (solver.kind is " + spec.solver.kind + ")"});
+  }
+  if (!bad.empty()) throw CaseError(bad);  // exit 2, nothing written
 
   const std::string dir = output_folder(spec);
-  OutputFolder sink(dir, spec);
+  if (a.from) {
+    std::error_code ec;
+    if (std::filesystem::equivalent(*a.from, dir, ec))
+      throw CaseError({{"command line", 0, "--out", dir,
+                        "is the folder given to --from: the restart would overwrite its own "
+                        "start; give another --out"}});
+  }
+  stop_on_signals();
+  OutputFolder sink(dir, spec, &stop_flag());  // FolderError: exit 2, nothing written
 
   const bool show_progress = !a.quiet && isatty(fileno(stderr));
   auto last = std::chrono::steady_clock::now();
@@ -54,11 +146,26 @@ int run_command(const RunArgs& a) {
     std::fflush(stderr);
   };
 
-  const RunSummary summary =
-      simulate(spec, sink, show_progress ? ProgressFn(progress) : ProgressFn());
+  RunSummary summary =
+      simulate(spec, sink, show_progress ? ProgressFn(progress) : ProgressFn(), &stop_flag());
   if (show_progress) std::fprintf(stderr, "\r%80s\r", "");
+  if (!sink.error().empty()) {
+    // the sink stopped the run: what summary.json says (OutputFolder::end)
+    summary.message = sink.error();
+    summary.termination = Termination::OutputFailure;
+  }
   std::printf("%s", brief_report(summary).c_str());
   std::printf("output        %s/\n", dir.c_str());
+  // A fixed-step scheme with too large a step can end far inside the stator and still
+  // "complete": say so. A tenth of the clearance: beyond it the contact normal and the gap of
+  // the scheme's state no longer describe the same geometry (mj at h = 5e-3 reached 79 g0).
+  const double g0 = spec.params.stator.gap;
+  if (summary.max_penetration > 0.1 * g0) {
+    std::fprintf(stderr,
+                 "rubdyn run: warning: the largest penetration, %.3g m, is %.3g times the "
+                 "clearance g0 = %.3g m: the result is not a resolved solution (reduce h)\n",
+                 summary.max_penetration, summary.max_penetration / g0, g0);
+  }
   if (!summary.complete()) {
     std::fprintf(stderr, "rubdyn run: ended early (%s): %s\n",
                  std::string(to_string(summary.termination)).c_str(), summary.message.c_str());
@@ -80,8 +187,14 @@ void add_run_command(CLI::App& app, Action& action) {
   sub->add_option("--output-every", a->output_every, "fixed-step schemes: write every N-th step");
   sub->add_option("--t-end", a->t_end, "end time [s] (overrides run.t_end)");
   sub->add_option("--out", a->out, "output folder (default out/<case name>)");
+  sub->add_option("--from", a->from,
+                  "restart: start from the last complete sample of this output folder");
+  sub->add_option("--at", a->at, "restart: start from the sample of --from at this time [s]");
   sub->add_flag("--quiet", a->quiet, "no progress line");
-  sub->callback([a, &action] { action = [a] { return run_command(*a); }; });
+  sub->callback([a, &action] {
+    if (a->at && !a->from) throw CLI::ValidationError("--at", "needs --from");
+    action = [a] { return run_command(*a); };
+  });
 }
 
 }  // namespace rubdyn::app

@@ -20,7 +20,8 @@ struct SweepArgs {
   std::vector<std::string> vary;
   std::string out = "out/sweep", shard, solver, rtol, atol, h, t_end;
   int jobs = 0;
-  bool certify = false, quiet = false;
+  long max_points = kDefaultMaxPoints;
+  bool certify = false, quiet = false, resume = false;
   double min_turns = 1.0;
 };
 
@@ -42,6 +43,16 @@ int sweep_command(const SweepArgs& a) {
   o.out = a.out;
   o.certify = a.certify;
   o.analysis.min_turns = a.min_turns;
+  if (a.max_points < 1) throw std::invalid_argument("--max-points must be >= 1");
+  o.max_points = a.max_points;
+  o.resume = a.resume;
+  o.plan = [](const SweepPlan& p) {
+    std::printf(
+        "plan          %ld points; this run: %ld runs, %.6g s simulated, about %.3g "
+        "output rows (%.3g MB)\n",
+        p.points, p.runs, p.simulated_seconds, p.output_rows, p.output_bytes / 1e6);
+    std::fflush(stdout);
+  };
   const bool tty = !a.quiet && isatty(fileno(stderr));
   if (tty) {
     o.progress = [](long done, long total) {
@@ -89,6 +100,10 @@ void add_sweep_commands(CLI::App& app, Action& action) {
   sub->add_option("--t-end", a->t_end, "end time [s]");
   sub->add_option("--min-turns", a->min_turns,
                   "sustained whirl: orbit revolutions in one run (default 1)");
+  sub->add_option("--max-points", a->max_points,
+                  "run sweeps of more points than this (default 10000: larger ones are refused)");
+  sub->add_flag("--resume", a->resume,
+                "skip the points whose folder holds a complete run of the same resolved case");
   sub->add_flag("--quiet", a->quiet, "no progress line");
   sub->callback([a, &action] { action = [a] { return sweep_command(*a); }; });
 

@@ -4,10 +4,16 @@
 
 #include "commands.hpp"
 #include "rubdyn/io/case_error.hpp"
+#include "rubdyn/io/output_folder.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"rubdyn: reference solutions for rotor-stator rub with Coulomb friction"};
   app.require_subcommand(1);
+  app.footer(
+      "Exit codes: 0 complete result; 2 bad input or usage, output folder in use or not "
+      "preparable (nothing written); 3 run ended early for a numerical reason; 4 interrupted by "
+      "SIGINT/SIGTERM; 5 a write failed (the message names the file). In 3, 4 and 5 the output so "
+      "far is kept and summary.json says \"complete\": false with the reason (README.md).");
   rubdyn::app::Action action;
   rubdyn::app::add_check_command(app, action);
   rubdyn::app::add_campbell_command(app, action);
@@ -25,7 +31,13 @@ int main(int argc, char** argv) {
     return action ? action() : 2;
   } catch (const rubdyn::CaseError& e) {
     std::fprintf(stderr, "%s\n", e.what());
-    return 2;
+    return rubdyn::kExitBadInput;
+  } catch (const rubdyn::FolderError& e) {
+    std::fprintf(stderr, "rubdyn: error: %s (the run did not start)\n", e.what());
+    return rubdyn::kExitBadInput;
+  } catch (const rubdyn::OutputError& e) {
+    std::fprintf(stderr, "rubdyn: error: %s\n", e.what());
+    return rubdyn::kExitOutput;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "rubdyn: error: %s\n", e.what());
     return 2;

@@ -157,6 +157,15 @@ struct CvodeSession::Impl {
   CvodeStats acc;  // counters of previous restarts
   bool started = false;
   int n_roots = 0;
+  /// The last message CVODES reported (error or warning), without its "[CVODES ERROR]"
+  /// framing. CVODES prints nothing itself: its messages become part of the typed result.
+  std::string message;
+
+  static void on_message(int code, const char* module, const char* function, char* msg, void* ud) {
+    auto* self = static_cast<Impl*>(ud);
+    self->message = std::string(code < 0 ? "" : "warning: ") + (function ? function : "?") + ": " +
+                    (msg ? msg : "") + " (" + (module ? module : "?") + ")";
+  }
 
   static int rhs(realtype t, N_Vector y, N_Vector yd, void* ud) {
     auto* self = static_cast<Impl*>(ud);
@@ -236,6 +245,7 @@ CvodeSession::CvodeSession(const CvodeConfig& cfg, const CvodeCallbacks& cb)
   N_VConst(0.0, I.y);
   I.mem = CVodeCreate(cfg.method == CvodeMethod::BDF ? CV_BDF : CV_ADAMS, I.ctx);
   if (!I.mem) throw std::runtime_error("CVODE: CVodeCreate failed");
+  check(CVodeSetErrHandlerFn(I.mem, &Impl::on_message, &I), "CVodeSetErrHandlerFn");
   check(CVodeInit(I.mem, &Impl::rhs, 0.0, I.y), "CVodeInit");
   check(CVodeSetUserData(I.mem, &I), "CVodeSetUserData");
   check(CVodeWFtolerances(I.mem, &Impl::weights), "CVodeWFtolerances");
@@ -333,6 +343,7 @@ CvodeSession::Status CvodeSession::advance(double tout, double& t, double* y, bo
     return Status::Reached;
   }
   last_error_ = flag_name(flag);
+  if (!I.message.empty()) last_error_ += " (" + I.message + ")";
   return Status::Failure;
 }
 
@@ -349,7 +360,10 @@ void CvodeSession::dky(double t, int k, double* out) const {
   N_Vector v = N_VMake_Serial(I.n, out, I.ctx);
   const int flag = CVodeGetDky(I.mem, t, k, v);
   N_VDestroy(v);
-  check(flag, "CVodeGetDky");
+  if (flag < 0) {
+    throw std::runtime_error("CVODE: CVodeGetDky failed: " + flag_name(flag) +
+                             (I.message.empty() ? "" : " (" + I.message + ")"));
+  }
 }
 
 void CvodeSession::root_info(int* info) const {

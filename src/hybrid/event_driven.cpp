@@ -483,6 +483,10 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
         if (opt_.progress)
           opt_.progress(t, std::accumulate(sum_.events.begin(), sum_.events.end(), 0L), m_.spin(v),
                         phase_);
+        if (opt_.stop && t < t_end_ && opt_.stop->load(std::memory_order_relaxed)) {
+          fail(Termination::Interrupted, fmt::format("interrupted at t = {:.17g}", t));
+          break;
+        }
         if (t >= tout && tout == next_out_)
           next_out_ = t_init_ + static_cast<double>(++k_out_) * opt_.output_dt;
         continue;

@@ -17,6 +17,7 @@
 
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
+#include "rubdyn/stepping/fixed_step.hpp"
 
 namespace rubdyn {
 
@@ -73,6 +74,7 @@ const std::vector<KeySpec>& schema() {
       const char* name = i == TH ? "omega0" : kVelNames[i];
       num("initial", name, false, [i](CaseSpec& c) { return &c.initial.v0[i]; });
     }
+    num("run", "t_start", false, [](CaseSpec& c) { return &c.run.t_start; });
     num("run", "t_end", true, [](CaseSpec& c) { return &c.run.t_end; });
     num("run", "omega_lim", true, [](CaseSpec& c) { return &c.run.omega_lim; });
     text("solver", "kind", [](CaseSpec& c) { return &c.solver.kind; });
@@ -192,7 +194,9 @@ class Loader {
       const auto dot = lhs.find('.');
       if (eq == std::string::npos || dot == std::string::npos || dot == 0 ||
           dot + 1 == lhs.size()) {
-        issues_.push_back({"--set", 0, lhs, "", "an override must read section.key=value"});
+        // (an empty --set '' has no key to name: the text itself is shown)
+        issues_.push_back({"--set", 0, lhs.empty() ? "(override)" : lhs, "\"" + ov + "\"",
+                           "an override must read section.key=value"});
         continue;
       }
       const std::string section = lhs.substr(0, dot), key = lhs.substr(dot + 1);
@@ -285,6 +289,14 @@ class Loader {
         }
         case Kind::Integer:
           if (auto i = n->as_integer()) {
+            // TOML integers are 64-bit: a value outside int would wrap (4294967297 -> 1)
+            if (i->get() < std::numeric_limits<int>::min() ||
+                i->get() > std::numeric_limits<int>::max()) {
+              issue(full, n, node_text(*n),
+                    fmt::format("must be an integer in [{}, {}]", std::numeric_limits<int>::min(),
+                                std::numeric_limits<int>::max()));
+              break;
+            }
             *ks.integer(c) = static_cast<int>(i->get());
           } else {
             issue(full, n, node_text(*n), "must be an integer");
@@ -344,7 +356,12 @@ class Loader {
     rule(k.e_t >= 0 && k.e_t <= 1, "contact.e_t", k.e_t, "must lie in [0, 1] (a restitution)");
     rule(c.params.loads.gravity >= 0, "loads.gravity", c.params.loads.gravity,
          "must be >= 0 (its direction is fixed: -Y)");
+    rule(c.run.t_start >= 0, "run.t_start", c.run.t_start, "must be >= 0");
     rule(c.run.t_end > 0, "run.t_end", c.run.t_end, "must be > 0");
+    if (c.run.t_end > 0 && c.run.t_start >= 0) {
+      rule(c.run.t_end > c.run.t_start, "run.t_end", c.run.t_end,
+           fmt::format("must be > run.t_start = {:.17g}", c.run.t_start));
+    }
     rule(c.run.omega_lim > 0, "run.omega_lim", c.run.omega_lim, "must be > 0");
     const auto& so = c.solver;
     static const std::vector<std::string> kinds = {"event", "carp-onevc", "carp-qn", "mj",
@@ -372,13 +389,51 @@ class Loader {
     rule(so.atol > 0, "solver.atol", so.atol, "must be > 0");
     rule(so.max_events_per_second > 0, "solver.max_events_per_second", so.max_events_per_second,
          "must be > 0");
-    rule(so.h > 0, "solver.h", so.h, "must be > 0");
-    rule(so.itmax >= 1, "solver.itmax", so.itmax, "must be >= 1");
-    rule(so.qn_tol > 0, "solver.qn_tol", so.qn_tol, "must be > 0");
-    rule(so.theta >= 0.5 && so.theta <= 1, "solver.theta", so.theta, "must lie in [0.5, 1]");
-    rule(so.eta >= 0 && so.eta <= 1, "solver.eta", so.eta, "must lie in [0, 1]");
-    rule(c.output.dt > 0, "output.dt", c.output.dt, "must be > 0");
-    rule(c.output.every >= 0, "output.every", c.output.every, "must be >= 0 (0: use output.dt)");
+    // The fixed-step options: the rules are stated once, in stepping/fixed_step.cpp. The step
+    // count rules (a whole number of steps, at most kMaxFixedSteps) apply to fixed-step runs.
+    {
+      FixedStepOptions fo;
+      fo.h = so.h;
+      fo.itmax = so.itmax;
+      fo.qn_tol = so.qn_tol;
+      fo.theta = so.theta;
+      fo.eta = so.eta;
+      fo.output_every = c.output.every;
+      fo.output_dt = c.output.dt;
+      auto bad = fixed_step_option_problems(fo);
+      if (so.kind != "event") {
+        for (auto& p : fixed_step_count_problems(fo.h, c.run.t_start, c.run.t_end))
+          bad.push_back(p);
+      }
+      static const std::map<std::string, std::string> key_of = {
+          {"h", "solver.h"},          {"itmax", "solver.itmax"},       {"qn_tol", "solver.qn_tol"},
+          {"theta", "solver.theta"},  {"eta", "solver.eta"},           {"t_end", "run.t_end"},
+          {"output_dt", "output.dt"}, {"output_every", "output.every"}};
+      for (const auto& p : bad) {
+        const std::string& key = key_of.at(p.option);
+        if (key == "run.t_end" && !(c.run.t_end > c.run.t_start)) continue;  // reported above
+        const toml::node* n = at(key);
+        issue(key, n, n ? node_text(*n) : p.value + " (default)", p.rule);
+      }
+    }
+    // Output size: at most kMaxOutputRows rows (output.dt = 1e-300 once wrote 117 MB in 5 s on
+    // its way to 1e297 rows; t_end = 1e300 is the same mistake).
+    if (c.run.t_end > c.run.t_start && c.output.dt > 0 && so.h > 0) {
+      const bool every = so.kind != "event" && c.output.every > 0;
+      const double span = c.run.t_end - c.run.t_start;
+      const double rows = every ? span / so.h / c.output.every : span / c.output.dt;
+      if (!(rows <= static_cast<double>(kMaxOutputRows))) {
+        // name the key the user just changed, when it is one of them
+        const std::string key = every                            ? "output.every"
+                                : overridden_.count("run.t_end") ? "run.t_end"
+                                                                 : "output.dt";
+        const toml::node* n = at(key);
+        issue(key, n, n ? node_text(*n) : "(default)",
+              fmt::format("the run would write {:.3g} rows of output (about {:.3g} GB), above "
+                          "the limit of {:.0e} rows; raise output.dt or shorten run.t_end",
+                          rows, rows * 420e-9, static_cast<double>(kMaxOutputRows)));
+      }
+    }
     // The initial state must not penetrate the stator: d_N = g0 - |(x_r - x_s, y_r - y_s)| >= 0.
     if (s.gap > 0) {
       const Vec7& q = c.initial.q0;
@@ -418,19 +473,51 @@ CaseSpec parse_case(std::string_view toml_text, const std::string& source,
 }
 
 CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides) {
+  namespace fs = std::filesystem;
+  auto refuse = [&path](const std::string& why) {
+    throw CaseError({{path, 0, "(file)", "", why}});
+  };
+  std::error_code ec;
+  const auto st = fs::status(path, ec);
+  if (fs::is_directory(st)) refuse("is a directory, not a case file");
+  // a device (/dev/zero), a pipe or a socket may never end: read at most kMaxCaseBytes
   std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    throw CaseError({{path, 0, "(file)", "",
-                      std::string("cannot read the case file: ") + std::strerror(errno)}});
+  if (!in) refuse(std::string("cannot read the case file: ") + std::strerror(errno));
+  std::string text(kMaxCaseBytes + 1, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  if (text.size() > kMaxCaseBytes) {
+    refuse(fmt::format("{} larger than {} bytes: not a case file",
+                       fs::is_regular_file(st) ? "a file" : "a special file (device or pipe)",
+                       kMaxCaseBytes));
   }
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return parse_case(ss.str(), path, overrides);
+  if (text.find('\0') != std::string::npos) refuse("holds NUL bytes: not a text (TOML) file");
+  return parse_case(text, path, overrides);
+}
+
+std::string toml_quote(std::string_view text) {
+  std::string out = "\"";
+  for (const char ch : text) {
+    switch (ch) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      case '\r': out += "\\r"; break;
+      default:
+        if (static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f) {
+          out += fmt::format("\\u{:04X}", static_cast<unsigned>(static_cast<unsigned char>(ch)));
+        } else {
+          out += ch;
+        }
+    }
+  }
+  return out + "\"";
 }
 
 std::string to_toml(const CaseSpec& c) {
-  std::string out =
-      fmt::format("# resolved case: every key with its value (rubdyn)\nname = \"{}\"\n", c.name);
+  std::string out = fmt::format("# resolved case: every key with its value (rubdyn)\nname = {}\n",
+                                toml_quote(c.name));
   CaseSpec copy = c;  // schema accessors take a mutable CaseSpec
   std::string section;
   for (const auto& ks : schema()) {
@@ -441,15 +528,7 @@ std::string to_toml(const CaseSpec& c) {
     switch (ks.kind) {
       case Kind::Number: out += fmt::format("{} = {}\n", ks.key, *ks.num(copy)); break;
       case Kind::Integer: out += fmt::format("{} = {}\n", ks.key, *ks.integer(copy)); break;
-      case Kind::String: {
-        std::string v = *ks.text(copy), esc;
-        for (char ch : v) {
-          if (ch == '"' || ch == '\\') esc += '\\';
-          esc += ch;
-        }
-        out += fmt::format("{} = \"{}\"\n", ks.key, esc);
-        break;
-      }
+      case Kind::String: out += fmt::format("{} = {}\n", ks.key, toml_quote(*ks.text(copy))); break;
     }
   }
   return out;

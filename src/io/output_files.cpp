@@ -1,5 +1,8 @@
 // OutputFolder: timeseries.csv, events.csv, summary.json, case.resolved.toml.
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/file.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cmath>
@@ -9,20 +12,29 @@
 
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/output_folder.hpp"
+#include "rubdyn/io/text_files.hpp"
 
 namespace rubdyn {
 
 namespace {
 
+/// "cannot write PATH: reason", the reason from errno (set by the failed call).
+std::string cannot_write(const std::string& path) {
+  return fmt::format("cannot write {}: {}", path,
+                     errno ? std::strerror(errno) : "write failed (no reason given)");
+}
+
 std::FILE* open_or_throw(const std::string& path) {
+  errno = 0;
   std::FILE* f = std::fopen(path.c_str(), "w");
-  if (!f) throw std::runtime_error(fmt::format("cannot write {}: {}", path, std::strerror(errno)));
+  if (!f) throw std::runtime_error(cannot_write(path));
   return f;
 }
 
-void write_or_throw(std::FILE* f, const std::string& text, const std::string& what) {
+void write_or_throw(std::FILE* f, const std::string& text, const std::string& path) {
+  errno = 0;
   if (std::fwrite(text.data(), 1, text.size(), f) != text.size()) {
-    throw std::runtime_error(fmt::format("cannot write {}: {}", what, std::strerror(errno)));
+    throw std::runtime_error(cannot_write(path));
   }
 }
 
@@ -53,39 +65,81 @@ std::string json_number(double x) {
 
 }  // namespace
 
-OutputFolder::OutputFolder(const std::string& dir, const CaseSpec& spec) : dir_(dir) {
+OutputFolder::OutputFolder(const std::string& dir, const CaseSpec& spec, std::atomic<bool>* stop)
+    : dir_(dir), stop_(stop) {
+  namespace fs = std::filesystem;
   std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) throw std::runtime_error(fmt::format("cannot create {}: {}", dir, ec.message()));
-  // A summary.json left from an earlier run would describe another run: remove it first.
-  std::filesystem::remove(dir + "/summary.json", ec);
-  {
-    std::FILE* f = open_or_throw(dir + "/case.resolved.toml");
-    const std::string text = to_toml(spec);
-    const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
-    std::fclose(f);
-    if (!ok) throw std::runtime_error("cannot write " + dir + "/case.resolved.toml");
+  fs::create_directories(dir, ec);
+  if (ec) throw FolderError(fmt::format("cannot create {}: {}", dir, ec.message()));
+  if (!fs::is_directory(dir, ec)) throw FolderError(fmt::format("{}: not a directory", dir));
+  // Advisory lock on the directory itself (no lock file left behind): a second run into the
+  // same folder would interleave its rows with ours.
+  lock_fd_ = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (lock_fd_ < 0) throw FolderError(fmt::format("cannot open {}: {}", dir, std::strerror(errno)));
+  if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+    const int err = errno;
+    ::close(lock_fd_);
+    lock_fd_ = -1;
+    throw FolderError(err == EWOULDBLOCK
+                          ? fmt::format("{} is in use by another rubdyn run (it holds the folder's "
+                                        "lock); choose another --out or wait for it to end",
+                                        dir)
+                          : fmt::format("cannot lock {}: {}", dir, std::strerror(err)));
   }
-  ts_ = open_or_throw(dir + "/timeseries.csv");
-  ev_ = open_or_throw(dir + "/events.csv");
-  std::string header = "t";
-  for (const char* n : kDofNames) header += std::string(",") + n;
-  for (const char* n : kVelNames) header += std::string(",") + n;
-  header += ",d_N,v_N,v_t,F_N,F_T,phase\n";
-  write_or_throw(ts_, header, dir + "/timeseries.csv");
-  write_or_throw(ev_,
-                 "t,kind,phase_before,phase_after,d_N,v_N_minus,v_N_plus,v_t_minus,v_t_plus,P_N,"
-                 "P_T,F_N,F_T,t_accumulation,witness,note\n",
-                 dir + "/events.csv");
+  // Everything that can be checked is checked before the first byte is written: the folder
+  // and the files this run replaces must be writable; a summary.json of an earlier run must go
+  // (it would describe another run next to our files).
+  auto fail = [&](const std::string& what) {
+    ::close(lock_fd_);
+    lock_fd_ = -1;
+    throw FolderError(what);
+  };
+  if (::access(dir.c_str(), W_OK | X_OK) != 0)
+    fail(fmt::format("cannot write into {}: {}", dir, std::strerror(errno)));
+  for (const char* name : {"case.resolved.toml", "timeseries.csv", "events.csv"}) {
+    const std::string path = dir + "/" + name;
+    if (fs::exists(fs::symlink_status(path, ec)) && ::access(path.c_str(), W_OK) != 0)
+      fail(fmt::format("cannot write {}: {}", path, std::strerror(errno)));
+  }
+  if (!fs::remove(dir + "/summary.json", ec) && ec)
+    fail(fmt::format("cannot remove the old {}/summary.json: {}", dir, ec.message()));
+  try {
+    write_file_atomic(dir + "/case.resolved.toml", to_toml(spec));
+    ts_ = open_or_throw(dir + "/timeseries.csv");
+    ev_ = open_or_throw(dir + "/events.csv");
+    std::string header = "t";
+    for (const char* n : kDofNames) header += std::string(",") + n;
+    for (const char* n : kVelNames) header += std::string(",") + n;
+    header += ",d_N,v_N,v_t,F_N,F_T,phase\n";
+    write_or_throw(ts_, header, dir + "/timeseries.csv");
+    write_or_throw(ev_,
+                   "t,kind,phase_before,phase_after,d_N,v_N_minus,v_N_plus,v_t_minus,v_t_plus,"
+                   "P_N,P_T,F_N,F_T,t_accumulation,witness,note\n",
+                   dir + "/events.csv");
+    // headers on disk at once: a run killed before its first flush still leaves valid files
+    if (std::fflush(ts_) != 0) throw std::runtime_error(cannot_write(dir + "/timeseries.csv"));
+    if (std::fflush(ev_) != 0) throw std::runtime_error(cannot_write(dir + "/events.csv"));
+  } catch (const std::runtime_error& e) {
+    if (ts_) std::fclose(ts_);
+    if (ev_) std::fclose(ev_);
+    ts_ = ev_ = nullptr;
+    fail(e.what());
+  }
 }
 
 OutputFolder::~OutputFolder() {
   if (ts_) std::fclose(ts_);
   if (ev_) std::fclose(ev_);
+  if (lock_fd_ >= 0) ::close(lock_fd_);  // releases the lock
+}
+
+void OutputFolder::failed(const std::string& file) {
+  if (error_.empty()) error_ = cannot_write(dir_ + "/" + file);
+  if (stop_) stop_->store(true);
 }
 
 void OutputFolder::sample(const Sample& s) {
-  if (!ts_) return;
+  if (!ts_ || !error_.empty()) return;
   // Shortest representation that reads back to the same double ({} in fmt: Dragonbox), exact
   // like %.17g but about 3x cheaper, which matters: at 0.1 ms output the rows cost as much as
   // the event-driven integration of the reference case.
@@ -95,11 +149,11 @@ void OutputFolder::sample(const Sample& s) {
   for (int i = 0; i < kNumDofs; ++i) fmt::format_to(std::back_inserter(b), ",{}", s.v[i]);
   fmt::format_to(std::back_inserter(b), ",{},{},{},{},{},{}\n", s.d_N, s.v_N, s.v_t, s.F_N, s.F_T,
                  to_string(s.phase));
-  std::fwrite(b.data(), 1, b.size(), ts_);
+  if (std::fwrite(b.data(), 1, b.size(), ts_) != b.size()) failed("timeseries.csv");
 }
 
 void OutputFolder::event(const EventRecord& e) {
-  if (!ev_) return;
+  if (!ev_ || !error_.empty()) return;
   auto csv_text = [](const std::string& s) {
     std::string out = "\"";
     for (char ch : s) out += ch == '"' ? std::string("\"\"") : std::string(1, ch);
@@ -112,21 +166,32 @@ void OutputFolder::event(const EventRecord& e) {
       e.v_N_minus, e.v_N_plus, e.v_t_minus, e.v_t_plus, e.P_N, e.P_T, e.F_N, e.F_T,
       std::isnan(e.t_accumulation) ? std::string() : fmt::format("{:.17g}", e.t_accumulation),
       csv_text(e.witness), csv_text(e.note));
-  std::fwrite(row.data(), 1, row.size(), ev_);
   // events are rare: flush both files so that a run that dies keeps everything up to here
-  std::fflush(ev_);
-  std::fflush(ts_);
+  if (std::fwrite(row.data(), 1, row.size(), ev_) != row.size() || std::fflush(ev_) != 0) {
+    failed("events.csv");
+  } else if (std::fflush(ts_) != 0) {
+    failed("timeseries.csv");
+  }
 }
 
 void OutputFolder::end(const RunSummary& s) {
-  if (ts_) std::fclose(ts_);
-  if (ev_) std::fclose(ev_);
+  // fclose flushes what is buffered: its failure is a failed write like any other
+  if (ts_ && std::fclose(ts_) != 0) failed("timeseries.csv");
+  if (ev_ && std::fclose(ev_) != 0) failed("events.csv");
   ts_ = ev_ = nullptr;
-  std::FILE* f = open_or_throw(dir_ + "/summary.json");
-  const std::string text = summary_json(s);
-  const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
-  std::fclose(f);
-  if (!ok) throw std::runtime_error("cannot write " + dir_ + "/summary.json");
+  RunSummary out = s;
+  if (!error_.empty()) {
+    out.termination = Termination::OutputFailure;
+    // the solver's own reason, unless it only obeyed the stop that the failure raised
+    const bool own = !s.complete() && s.termination != Termination::Interrupted;
+    out.message = error_ + (own ? " (the solver also ended: " + s.message + ")" : std::string());
+  }
+  try {
+    write_file_atomic(dir_ + "/summary.json", summary_json(out));
+  } catch (const std::runtime_error& e) {
+    if (error_.empty()) error_ = e.what();
+    throw OutputError(e.what());
+  }
 }
 
 std::string summary_json(const RunSummary& s) {

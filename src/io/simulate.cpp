@@ -8,11 +8,13 @@
 
 namespace rubdyn {
 
-RunSummary simulate(const CaseSpec& spec, OutputSink& sink, const ProgressFn& progress) {
+RunSummary simulate(const CaseSpec& spec, OutputSink& sink, const ProgressFn& progress,
+                    const std::atomic<bool>* stop) {
   const RotorStatorModel model(spec.params);
   MechanicalState s0;
   s0.q = spec.initial.q0;
   s0.v = spec.initial.v0;
+  s0.t = spec.run.t_start;
   if (spec.solver.kind == "event") {
     EventDrivenOptions opt;
     opt.rtol = spec.solver.rtol;
@@ -25,6 +27,7 @@ RunSummary simulate(const CaseSpec& spec, OutputSink& sink, const ProgressFn& pr
     opt.omega_lim = spec.run.omega_lim;
     opt.max_events_per_second = spec.solver.max_events_per_second;
     opt.progress = progress;
+    opt.stop = stop;
     return run_event_driven(model, s0, spec.run.t_end, opt, sink);
   }
   FixedStepOptions opt;
@@ -40,6 +43,7 @@ RunSummary simulate(const CaseSpec& spec, OutputSink& sink, const ProgressFn& pr
   opt.output_every = spec.output.every;
   opt.output_dt = spec.output.dt;
   opt.omega_lim = spec.run.omega_lim;
+  opt.stop = stop;
   return run_fixed_step(model, s0, spec.run.t_end, opt, sink);
 }
 

@@ -1,5 +1,10 @@
 #include "rubdyn/io/text_files.hpp"
 
+#include <fmt/format.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -34,16 +39,31 @@ std::vector<std::string> split_csv_line(const std::string& line) {
   return out;
 }
 
+std::string cut_row_warning(const std::string& file, long line) {
+  return fmt::format(
+      "{}:{}: the last row has no line end (the run was cut short while writing it): ignored", file,
+      line);
+}
+
 void write_file_atomic(const std::string& path, const std::string& text) {
   const std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp, std::ios::binary);
-    f << text;
-    if (!f) throw std::runtime_error("cannot write " + tmp);
+  // Every step checked, close included (it flushes: a full disk shows there).
+  errno = 0;
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) throw OutputError("cannot write " + tmp + ": " + std::strerror(errno));
+  const bool wrote = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+  const bool flushed = wrote && std::fflush(f) == 0;
+  const int err = errno;
+  const bool closed = std::fclose(f) == 0;
+  if (!(wrote && flushed && closed)) {
+    const std::string why = std::strerror(wrote && flushed ? errno : err);
+    std::error_code ignore;
+    std::filesystem::remove(tmp, ignore);
+    throw OutputError("cannot write " + path + ": " + why);
   }
   std::error_code ec;
   std::filesystem::rename(tmp, path, ec);
-  if (ec) throw std::runtime_error("cannot rename " + tmp + " to " + path + ": " + ec.message());
+  if (ec) throw OutputError("cannot rename " + tmp + " to " + path + ": " + ec.message());
 }
 
 }  // namespace rubdyn

@@ -167,6 +167,11 @@ RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_
   std::string message;
   for (long i = 0; r.index < n_steps || i == 0; ++i) {
     const double t = init.t + static_cast<double>(i) * h;
+    if (o_.stop && o_.stop->load(std::memory_order_relaxed)) {
+      sum_.termination = Termination::Interrupted;
+      sum_.message = fmt::format("interrupted at t = {:.17g}", t);
+      break;
+    }
     const StepOutcome outcome = stepper.step(t, r, message);
     if (outcome != StepOutcome::Ok) {
       sum_.termination = outcome == StepOutcome::Painleve    ? Termination::Painleve
@@ -219,10 +224,64 @@ RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_
 
 }  // namespace
 
+std::vector<OptionProblem> fixed_step_option_problems(const FixedStepOptions& o) {
+  std::vector<OptionProblem> bad;
+  auto num = [](double x) { return fmt::format("{:.17g}", x); };
+  if (!(std::isfinite(o.h) && o.h > 0.0)) bad.push_back({"h", num(o.h), "must be finite and > 0"});
+  if (o.itmax < 1) bad.push_back({"itmax", fmt::format("{}", o.itmax), "must be >= 1"});
+  if (!(o.qn_tol > 0.0)) bad.push_back({"qn_tol", num(o.qn_tol), "must be > 0"});
+  if (!(o.theta >= 0.5 && o.theta <= 1.0))
+    bad.push_back({"theta", num(o.theta), "must lie in [0.5, 1]"});
+  if (!(o.eta >= 0.0 && o.eta <= 1.0)) bad.push_back({"eta", num(o.eta), "must lie in [0, 1]"});
+  if (o.output_every < 0)
+    bad.push_back(
+        {"output_every", fmt::format("{}", o.output_every), "must be >= 0 (0: use output_dt)"});
+  if (!(std::isfinite(o.output_dt) && o.output_dt > 0.0))
+    bad.push_back({"output_dt", num(o.output_dt), "must be finite and > 0"});
+  return bad;
+}
+
+std::vector<OptionProblem> fixed_step_count_problems(double h, double t_start, double t_end) {
+  std::vector<OptionProblem> bad;
+  const double span = t_end - t_start;
+  if (!(std::isfinite(span) && span > 0.0)) {
+    bad.push_back({"t_end", fmt::format("{:.17g}", t_end),
+                   fmt::format("must be finite and > t_start = {:.17g}", t_start)});
+    return bad;
+  }
+  if (!(std::isfinite(h) && h > 0.0)) return bad;  // reported by fixed_step_option_problems
+  const double steps = span / h;
+  if (!(steps <= static_cast<double>(kMaxFixedSteps))) {
+    bad.push_back({"h", fmt::format("{:.17g}", h),
+                   fmt::format("(t_end - t_start) / h = {:.6g} steps, above the limit of {} steps",
+                               steps, kMaxFixedSteps)});
+  } else if (std::abs(steps - std::round(steps)) > 1e-6 || std::round(steps) < 1.0) {
+    // 1e-6 of a step: far above the round-off of a decimal ratio (0.01 / 1e-6 is
+    // 10000.000000000002), far below any fraction of a step anyone means
+    bad.push_back({"h", fmt::format("{:.17g}", h),
+                   fmt::format("t_end - t_start = {:.17g} s is {:.9g} steps, not a whole number "
+                               "(the schemes keep one step; take h = (t_end - t_start) / n)",
+                               span, steps)});
+  }
+  return bad;
+}
+
 RunSummary run_fixed_step(const LagrangianModel& model, const MechanicalState& initial,
                           double t_end, const FixedStepOptions& opt, OutputSink& sink) {
-  const std::unique_ptr<Stepper> stepper = make_stepper(model, opt);
-  RunLoop loop(model, opt, sink);
+  auto bad = fixed_step_option_problems(opt);
+  for (auto& p : fixed_step_count_problems(opt.h, initial.t, t_end)) bad.push_back(std::move(p));
+  if (!bad.empty()) {
+    std::string text = "invalid fixed-step options:";
+    for (const auto& b : bad) text += fmt::format("\n  {} = {}: {}", b.option, b.value, b.rule);
+    throw std::invalid_argument(text);
+  }
+  // fixed_step_count_problems makes the span a whole number of steps: with h the span over that
+  // number, the last step ends at t_end (to round-off)
+  FixedStepOptions o = opt;
+  const long n_steps = std::max(1L, std::lround((t_end - initial.t) / opt.h));
+  o.h = (t_end - initial.t) / static_cast<double>(n_steps);
+  const std::unique_ptr<Stepper> stepper = make_stepper(model, o);
+  RunLoop loop(model, o, sink);
   return loop.run(*stepper, initial, t_end);
 }
 

@@ -20,6 +20,9 @@ struct Series {
   std::vector<double> t;
   std::vector<std::string> names;           ///< numeric columns other than t
   std::vector<std::vector<double>> values;  ///< values[c][i]
+  /// What the reader tolerated, e.g. a last row without its line end (a run that was killed)
+  /// that it dropped; the CLI prints them.
+  std::vector<std::string> warnings;
   const std::vector<double>* column(const std::string& name) const;
 };
 
@@ -36,6 +39,9 @@ std::vector<TimedEvent> read_events(const std::string& path);  ///< empty for a 
 struct ColumnDiff {
   std::string name;
   double sup = 0.0, rms = 0.0, t_sup = 0.0;  ///< t_sup: where the sup is reached
+  /// Sample times where a - b is not finite (a NaN or inf on one side or both): each is a
+  /// difference, never skipped; with any, sup and rms are infinite and t_sup is the first.
+  long non_finite = 0;
 };
 struct EventMatch {
   std::string kind;

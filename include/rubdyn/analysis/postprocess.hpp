@@ -52,6 +52,9 @@ struct RunRecord {
   std::vector<Sample> samples;  ///< timeseries.csv, in file order
   long events = 0;              ///< rows of events.csv (0 if absent)
   bool complete = true;         ///< summary.json "complete" (false: ended early or absent)
+  /// What the reader tolerated: a last row without its line end (a killed run), dropped; an
+  /// empty events.csv. The CLI prints them.
+  std::vector<std::string> warnings;
 };
 /// Throws std::runtime_error naming the file, line and problem on a missing or bad file.
 RunRecord read_run(const std::string& dir);
@@ -78,6 +81,11 @@ struct AnalysisOptions {
   double f_max = 2000.0;         ///< frequencies kept in the spectra: |f| <= f_max [Hz]
   std::optional<double> t0, t1;  ///< analysis window (default: the whole run)
 };
+
+/// Every rule `o` breaks, one message each naming the option (empty: valid): min_turns > 0,
+/// window > 0, overlap in [0, 1), pad >= 1, f_max > 0, all finite. Checked by analyze and by a
+/// sweep before its first point.
+std::vector<std::string> analysis_option_problems(const AnalysisOptions& o);
 
 struct RunVerdicts {
   double t0 = 0, t1 = 0;  ///< the analysed window [s]

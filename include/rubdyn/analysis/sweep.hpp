@@ -46,6 +46,22 @@ struct SweepPoint {
 /// The Cartesian product, last variation fastest.
 std::vector<SweepPoint> sweep_points(const std::vector<Variation>& vary);
 
+/// The number of points of the product (as a double: it may not fit in a long).
+double sweep_point_count(const std::vector<Variation>& vary);
+
+/// A sweep larger than this many points is refused unless max_points is raised (--max-points):
+/// 1e4 points of the reference case are about 1e4 x 10 ms of wall time and 1e4 output folders.
+inline constexpr long kDefaultMaxPoints = 10'000;
+
+/// What a sweep is about to do, once every point is validated and before the first one runs.
+struct SweepPlan {
+  long points = 0;               ///< in the whole sweep
+  long runs = 0;                 ///< in this shard, tight runs of --certify included
+  double simulated_seconds = 0;  ///< sum of run.t_end over the runs
+  double output_rows = 0;        ///< timeseries rows over the runs (estimate, events excluded)
+  double output_bytes = 0;       ///< about 420 bytes a row (21 numbers with 17 digits)
+};
+
 struct SweepOptions {
   std::string case_path;
   std::vector<std::string> sets;  ///< overrides common to every point (--set)
@@ -57,6 +73,12 @@ struct SweepOptions {
   AnalysisOptions analysis;
   /// Called (from worker threads, serialised) after each point with (done, total).
   std::function<void(long, long)> progress;
+  /// Skip the points whose folder holds a complete summary.json of the same resolved case
+  /// (case.resolved.toml equal to this point's): their analysis is redone, not their run.
+  bool resume = false;
+  long max_points = kDefaultMaxPoints;  ///< more points are refused (std::invalid_argument)
+  /// Called once every option and point is checked, before the first point runs.
+  std::function<void(const SweepPlan&)> plan;
 };
 
 struct SweepRow {
@@ -74,7 +96,9 @@ struct SweepRow {
   bool certified = false;  ///< verdicts agree (and both runs complete)
 };
 
-/// Validates every point (throws CaseError on the first bad one, before any output), runs this
+/// Checks every option (analysis options, repeated keys, the point count against max_points:
+/// std::invalid_argument) and every point (CaseError on the first bad one), all before any
+/// output; calls `plan`; runs this
 /// shard's points and writes OUT/sweep.csv (or OUT/sweep-shard-i-of-N.csv with a .json sidecar
 /// naming the total number of points). Returns the rows in point order.
 std::vector<SweepRow> run_sweep(const SweepOptions& o);

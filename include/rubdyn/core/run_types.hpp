@@ -45,13 +45,27 @@ enum class Termination : int {
   Painleve,    ///< the contact problem has no consistent (or several) solutions and no rule applies
   Zeno,        ///< an accumulation of impacts that could not be resolved
   Chattering,  ///< too many events per unit of simulated time
-  Interrupted,  ///< stopped by the user or a limit
+  Interrupted,    ///< stopped by the user (SIGINT, SIGTERM) at an output sample
+  OutputFailure,  ///< the output could not be written (disk full, I/O error); ends the run
 };
 std::string_view to_string(Termination t);
 
-/// Exit code of the CLI for a termination: 0 for Completed, 3 otherwise.
+/// Exit codes of the CLI (README.md, "Exit codes and the output contract"; `rubdyn --help`).
+inline constexpr int kExitOk = 0;           ///< complete result
+inline constexpr int kExitBadInput = 2;     ///< bad input, usage, folder locked: nothing written
+inline constexpr int kExitEarlyEnd = 3;     ///< numerical early end: output kept, incomplete
+inline constexpr int kExitInterrupted = 4;  ///< SIGINT / SIGTERM: output kept, incomplete
+inline constexpr int kExitOutput = 5;       ///< a write failed: the error names the file
+
+/// Exit code of the CLI for a termination: 0 for Completed, 4 for Interrupted, 5 for
+/// OutputFailure, 3 for the numerical ones.
 inline int exit_code(Termination t) {
-  return t == Termination::Completed ? 0 : 3;
+  switch (t) {
+    case Termination::Completed: return kExitOk;
+    case Termination::Interrupted: return kExitInterrupted;
+    case Termination::OutputFailure: return kExitOutput;
+    default: return kExitEarlyEnd;
+  }
 }
 
 /// One output sample (dense output on the output grid, or before/after an event).

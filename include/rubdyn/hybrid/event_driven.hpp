@@ -52,6 +52,7 @@
 //   - e_n = 0 never enters accumulation handling (ModeSwitcher::gap_closed);
 //   - output thinning costs no integration: samples are interpolated (CV_NORMAL);
 //   - omega_lim's witness is removed once crossed (main loop).
+#include <atomic>
 #include <functional>
 
 #include "rubdyn/core/run_types.hpp"
@@ -90,6 +91,9 @@ struct EventDrivenOptions {
   long max_steps_per_call = 10'000'000;
   /// Called at output samples with (t, events so far, omega, phase); may be empty.
   std::function<void(double, long, double, Phase)> progress;
+  /// When set and true (a signal handler sets it), the run ends right after its next output
+  /// sample with Termination::Interrupted, keeping what it wrote.
+  const std::atomic<bool>* stop = nullptr;
 };
 
 /// Integrates from `initial` to t_end; hands samples, events and the summary to `sink`.

@@ -14,6 +14,14 @@
 
 namespace rubdyn {
 
+/// Largest number of timeseries rows a case may ask for (t_end / output.dt, or the fixed-step
+/// count / output.every): 1e8 rows are about 42 GB. More is refused as bad input.
+inline constexpr long kMaxOutputRows = 100'000'000;
+
+/// A case file is read up to this size (1 MiB; the reference case is 2 kB): a larger file, or
+/// a device such as /dev/zero, is refused rather than read without end.
+inline constexpr std::size_t kMaxCaseBytes = 1 << 20;
+
 /// Reads, overrides, validates. Throws CaseError (every problem listed) on bad input.
 CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides = {});
 
@@ -24,6 +32,11 @@ CaseSpec parse_case(std::string_view toml_text, const std::string& source,
 /// The case as TOML with every default and override filled in (case.resolved.toml). Reading it
 /// back with parse_case gives the same CaseSpec (numbers are written with 17 significant digits).
 std::string to_toml(const CaseSpec& c);
+
+/// `text` as a TOML basic string, quotes included: ", \\ and every control character escaped,
+/// so that parsing it gives `text` back (case.resolved.toml, and --out / --set values that are
+/// paths, never read as TOML escapes).
+std::string toml_quote(std::string_view text);
 
 /// The output folder of a case: output.folder if set, else "out/<name>".
 std::string output_folder(const CaseSpec& c);

@@ -18,6 +18,8 @@ struct InitialState {
 
 /// [run]
 struct RunOptions {
+  /// [s] time of the initial state: 0, or the sample time of a restart (rubdyn run --from)
+  double t_start = 0.0;
   double t_end = 0.5;         ///< [s]
   double omega_lim = 2110.0;  ///< speed limit used by the analysis [rad/s]
 };

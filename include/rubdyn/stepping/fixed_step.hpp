@@ -9,7 +9,10 @@
 //               d_N >= 0
 // Each scheme is a Stepper (stepper.hpp; carpenter.cpp, moreau_jean.cpp state the decisions the
 // paper leaves open where they are taken); run_fixed_step is their one run loop.
+#include <atomic>
+#include <string>
 #include <string_view>
+#include <vector>
 
 #include "rubdyn/core/run_types.hpp"
 #include "rubdyn/model/lagrangian_model.hpp"
@@ -35,12 +38,40 @@ struct FixedStepOptions {
   int output_every = 0;  ///< write every N-th step (0: use output_dt)
   double output_dt = 1e-4;
   double omega_lim = 0.0;  ///< for the summary: first time omega (the model's spin) >= it
+  /// When set and true (a signal handler sets it), the run ends before its next step with
+  /// Termination::Interrupted, keeping what it wrote.
+  const std::atomic<bool>* stop = nullptr;
 };
 
+/// Largest number of steps of one fixed-step run (README, "Exit codes and the output contract").
+/// At about 1 us per step that is a quarter of an hour of integration alone; a larger count is
+/// almost surely a typo in h (h = 1e-20 s asks for 1e17 steps) and is refused before the run.
+inline constexpr long kMaxFixedSteps = 1'000'000'000;
+
+/// One broken rule of the fixed-step options: the option ("h", "itmax", "t_end", ...), its
+/// value as text, and the rule.
+struct OptionProblem {
+  std::string option, value, rule;
+};
+
+/// Every rule that `opt` breaks on its own (empty: valid): h finite and > 0; itmax >= 1;
+/// qn_tol > 0; theta in [0.5, 1]; eta in [0, 1]; output_every >= 0; output_dt finite and > 0.
+/// The one statement of these rules: run_fixed_step and the case-file validation
+/// (io/case_toml.cpp) both call it.
+std::vector<OptionProblem> fixed_step_option_problems(const FixedStepOptions& opt);
+
+/// The rules on the step count of a run from t_start to t_end with step h (empty: valid):
+/// t_end finite and > t_start; (t_end - t_start) / h a whole number of steps (within 1e-6 of a
+/// step: the schemes keep one h, Carpenter's central differences and Moreau-Jean's reused
+/// iteration matrix need it), at most kMaxFixedSteps. The run then ends at t_end exactly (to
+/// round-off), never one step short or past it.
+std::vector<OptionProblem> fixed_step_count_problems(double h, double t_start, double t_end);
+
 /// Runs a scheme from `initial` to t_end, handing samples, events and the summary to `sink`.
+/// Throws std::invalid_argument listing every broken rule of both functions above (and for a
+/// model with other than one contact, make_stepper) before anything is handed to the sink.
 /// Numerical trouble (Newton failure, non-finite state, Painleve) ends the run with a typed
-/// termination; nothing is thrown from inside the time loop. Throws std::invalid_argument for a
-/// bad h or a model with other than one contact (make_stepper), before any output.
+/// termination; nothing is thrown from inside the time loop.
 RunSummary run_fixed_step(const LagrangianModel& model, const MechanicalState& initial,
                           double t_end, const FixedStepOptions& opt, OutputSink& sink);
 
