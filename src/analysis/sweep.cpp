@@ -19,6 +19,7 @@
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/output_folder.hpp"
 #include "rubdyn/io/simulate.hpp"
+#include "rubdyn/io/solver_registry.hpp"
 #include "rubdyn/io/text_files.hpp"
 
 namespace rubdyn {
@@ -52,13 +53,11 @@ std::string opt_csv(const std::optional<double>& x) {
   return x ? fmt::format("{}", *x) : "";
 }
 
-// Tighter solver settings for --certify, as case overrides.
+// Tighter solver settings for --certify, as case overrides (the solver registry's).
 std::vector<std::string> tight_overrides(const CaseSpec& s) {
-  if (s.solver.kind == "event") {
-    return {fmt::format("solver.rtol={:.3e}", s.solver.rtol / 100.0),
-            fmt::format("solver.atol={:.3e}", s.solver.atol / 100.0)};
-  }
-  return {fmt::format("solver.h={:.6e}", s.solver.h / 10.0)};
+  const SolverEntry* solver = find_solver(s.solver.kind);
+  if (!solver) throw std::invalid_argument("unknown solver kind " + s.solver.kind);
+  return solver->tighter(s);
 }
 
 struct OneRun {
@@ -308,7 +307,8 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
       ++p.runs;
       const double span = c.run.t_end - c.run.t_start;
       p.simulated_seconds += span;
-      const bool every = c.solver.kind != "event" && c.output.every > 0;
+      const SolverEntry* solver = find_solver(c.solver.kind);
+      const bool every = solver && solver->fixed_step && c.output.every > 0;
       p.output_rows += every ? span / c.solver.h / c.output.every : span / c.output.dt;
     };
     for (size_t i : mine) add(specs[i]);

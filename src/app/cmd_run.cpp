@@ -22,6 +22,7 @@
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/output_folder.hpp"
 #include "rubdyn/io/simulate.hpp"
+#include "rubdyn/io/solver_registry.hpp"
 
 namespace rubdyn::app {
 
@@ -103,24 +104,31 @@ int run_command(const RunArgs& a) {
   } catch (const CaseError& e) {
     bad = e.issues();
   }
-  // options of the other family of solvers would be silently ignored: refused
-  if (bad.empty() && spec.solver.kind == "event") {
-    if (a.h)
-      bad.push_back({"command line", 0, "--h", *a.h,
-                     "applies to the fixed-step schemes only; the event solver has no step "
-                     "(give --solver mj, carp-onevc, ... or drop --h)"});
-    if (a.output_every)
-      bad.push_back({"command line", 0, "--output-every", *a.output_every,
-                     "applies to the fixed-step schemes only; the event solver writes every "
-                     "output.dt"});
-  }
-  if (bad.empty() && spec.solver.kind != "event") {
-    for (const auto& [given, name] : {std::pair{a.rtol, "--rtol"}, std::pair{a.atol, "--atol"},
-                                      std::pair{a.method, "--method"}})
-      if (given)
-        bad.push_back(
-            {"command line", 0, name, *given,
-             "applies to the event solver only (solver.kind is " + spec.solver.kind + ")"});
+  // an option the chosen solver does not read would be silently ignored: refused (the
+  // solver registry says which keys each solver reads)
+  if (bad.empty()) {
+    const SolverEntry& solver = *find_solver(spec.solver.kind);  // validated by load_case
+    const std::pair<const std::optional<std::string>&, const char*> given[] = {
+        {a.rtol, "solver.rtol"},
+        {a.atol, "solver.atol"},
+        {a.method, "solver.method"},
+        {a.h, "solver.h"},
+        {a.output_every, "output.every"}};
+    const char* flag_of[] = {"--rtol", "--atol", "--method", "--h", "--output-every"};
+    for (size_t i = 0; i < std::size(given); ++i) {
+      const std::string_view key = given[i].second;
+      const bool reads = key == "output.every" ? solver.fixed_step : solver.reads(key);
+      if (given[i].first && !reads) {
+        std::vector<std::string> readers;
+        for (const auto& e : solver_registry())
+          if (key == "output.every" ? e.fixed_step : e.reads(key)) readers.emplace_back(e.name);
+        std::string who;
+        for (const auto& r : readers) who += (who.empty() ? "" : ", ") + r;
+        bad.push_back({"command line", 0, flag_of[i], *given[i].first,
+                       fmt::format("solver {} does not read {} (it applies to: {})",
+                                   spec.solver.kind, key, who)});
+      }
+    }
   }
   if (!bad.empty()) throw CaseError(bad);  // exit 2, nothing written
 
@@ -179,7 +187,7 @@ void add_run_command(CLI::App& app, Action& action) {
   auto a = std::make_shared<RunArgs>();
   auto* sub = app.add_subcommand("run", "Run a case and write its output folder");
   add_case_options(*sub, a->c);
-  sub->add_option("--solver", a->solver, "event | carp-onevc | carp-qn | mj | mj-proj");
+  sub->add_option("--solver", a->solver, solver_names(" | "));
   sub->add_option("--method", a->method, "event solver, free flight: adams (default) | bdf");
   sub->add_option("--rtol", a->rtol, "event solver: relative tolerance");
   sub->add_option("--atol", a->atol, "event solver: absolute tolerance on positions [m]");

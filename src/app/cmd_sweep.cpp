@@ -10,6 +10,7 @@
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "rubdyn/analysis/sweep.hpp"
+#include "rubdyn/io/solver_registry.hpp"
 
 namespace rubdyn::app {
 
@@ -93,7 +94,7 @@ void add_sweep_commands(CLI::App& app, Action& action) {
   sub->add_option("--shard", a->shard, "run slice i of N only (i/N), for job arrays");
   sub->add_flag("--certify", a->certify,
                 "re-run each point tighter and report whether its verdicts hold");
-  sub->add_option("--solver", a->solver, "event | carp-onevc | carp-qn | mj | mj-proj");
+  sub->add_option("--solver", a->solver, solver_names(" | "));
   sub->add_option("--rtol", a->rtol, "event solver: relative tolerance");
   sub->add_option("--atol", a->atol, "event solver: absolute tolerance on positions [m]");
   sub->add_option("--h", a->h, "fixed-step schemes: time step [s]");

@@ -17,6 +17,7 @@
 
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/solver_registry.hpp"
 #include "rubdyn/stepping/fixed_step.hpp"
 
 namespace rubdyn {
@@ -364,12 +365,14 @@ class Loader {
     }
     rule(c.run.omega_lim > 0, "run.omega_lim", c.run.omega_lim, "must be > 0");
     const auto& so = c.solver;
-    static const std::vector<std::string> kinds = {"event", "carp-onevc", "carp-qn", "mj",
-                                                   "mj-proj"};
-    if (std::find(kinds.begin(), kinds.end(), so.kind) == kinds.end()) {
+    const SolverEntry* solver = find_solver(so.kind);
+    if (!solver) {
+      std::vector<std::string> kinds;
+      for (const auto& e : solver_registry()) kinds.emplace_back(e.name);
       issue("solver.kind", at("solver.kind"), "\"" + so.kind + "\"",
-            "must be one of event, carp-onevc, carp-qn, mj, mj-proj" + suggestion(so.kind, kinds));
+            "must be one of " + solver_names(", ") + suggestion(so.kind, kinds));
     }
+    const bool fixed_step = solver && solver->fixed_step;
     if (so.method != "bdf" && so.method != "adams") {
       issue("solver.method", at("solver.method"), "\"" + so.method + "\"", "must be bdf or adams");
     }
@@ -401,7 +404,7 @@ class Loader {
       fo.output_every = c.output.every;
       fo.output_dt = c.output.dt;
       auto bad = fixed_step_option_problems(fo);
-      if (so.kind != "event") {
+      if (fixed_step) {
         for (auto& p : fixed_step_count_problems(fo.h, c.run.t_start, c.run.t_end))
           bad.push_back(p);
       }
@@ -419,7 +422,7 @@ class Loader {
     // Output size: at most kMaxOutputRows rows (output.dt = 1e-300 once wrote 117 MB in 5 s on
     // its way to 1e297 rows; t_end = 1e300 is the same mistake).
     if (c.run.t_end > c.run.t_start && c.output.dt > 0 && so.h > 0) {
-      const bool every = so.kind != "event" && c.output.every > 0;
+      const bool every = fixed_step && c.output.every > 0;
       const double span = c.run.t_end - c.run.t_start;
       const double rows = every ? span / so.h / c.output.every : span / c.output.dt;
       if (!(rows <= static_cast<double>(kMaxOutputRows))) {
