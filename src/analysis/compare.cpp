@@ -10,20 +10,13 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "rubdyn/io/text_files.hpp"
+#include "rubdyn/io/output_reader.hpp"
 
 namespace rubdyn {
 
 namespace {
 
 const char* const kStandard[] = {"omega", "x_r", "y_r", "x_s", "y_s", "d_N"};
-
-bool parse_number(const std::string& s, double& x) {
-  if (s.empty()) return false;
-  char* end = nullptr;
-  x = std::strtod(s.c_str(), &end);
-  return end && *end == '\0';
-}
 
 std::string timeseries_path(const std::string& path) {
   return std::filesystem::is_directory(path) ? path + "/timeseries.csv" : path;
@@ -51,39 +44,23 @@ const std::vector<double>* Series::column(const std::string& name) const {
 }
 
 Series read_series(const std::string& path) {
-  const std::string file = timeseries_path(path);
-  std::ifstream in(file);
-  if (!in) throw std::runtime_error(fmt::format("{}: cannot read", file));
+  const CsvTable table = read_csv(timeseries_path(path));
+  const std::string& file = table.path;
   Series s;
   s.source = file;
-  std::string line;
-  if (!std::getline(in, line)) throw std::runtime_error(fmt::format("{}: empty file", file));
-  const auto header = split_csv_line(line);
-  int tcol = -1;
-  std::vector<int> numeric;  // candidate columns, decided on the first data row
-  for (std::size_t c = 0; c < header.size(); ++c)
-    if (header[c] == "t") tcol = static_cast<int>(c);
+  s.warnings = table.warnings;
+  const int tcol = table.column("t");
   if (tcol < 0) throw std::runtime_error(fmt::format("{}:1: no column named t", file));
-  int lineno = 1;
-  std::vector<int> cols;
-  while (std::getline(in, line)) {
-    ++lineno;
-    if (line.empty()) continue;
-    if (in.eof()) {  // no line end: cut short
-      s.warnings.push_back(cut_row_warning(file, lineno));
-      break;
-    }
-    const auto f = split_csv_line(line);
-    if (f.size() != header.size()) {
-      throw std::runtime_error(fmt::format("{}:{}: {} fields, the header has {}", file, lineno,
-                                           f.size(), header.size()));
-    }
-    if (cols.empty() && s.names.empty()) {
+  std::vector<int> cols;  // the numeric columns, decided on the first data row
+  for (std::size_t k = 0; k < table.rows.size(); ++k) {
+    const auto& f = table.rows[k];
+    const long lineno = table.line_of[k];
+    if (k == 0) {
       for (std::size_t c = 0; c < f.size(); ++c) {
         double x;
         if (static_cast<int>(c) != tcol && parse_number(f[c], x)) {
           cols.push_back(static_cast<int>(c));
-          s.names.push_back(header[c]);
+          s.names.push_back(table.header[c]);
         }
       }
       s.values.resize(cols.size());
@@ -97,13 +74,13 @@ Series read_series(const std::string& path) {
       throw std::runtime_error(fmt::format("{}:{}: t = {} decreases", file, lineno, t));
     }
     s.t.push_back(t);
-    for (std::size_t k = 0; k < cols.size(); ++k) {
+    for (std::size_t c = 0; c < cols.size(); ++c) {
       double x;
-      if (!parse_number(f[cols[k]], x)) {
+      if (!parse_number(f[cols[c]], x)) {
         throw std::runtime_error(
-            fmt::format("{}:{}: {} = '{}' is not a number", file, lineno, s.names[k], f[cols[k]]));
+            fmt::format("{}:{}: {} = '{}' is not a number", file, lineno, s.names[c], f[cols[c]]));
       }
-      s.values[k].push_back(x);
+      s.values[c].push_back(x);
     }
   }
   if (s.t.size() < 2) throw std::runtime_error(fmt::format("{}: fewer than two samples", file));
@@ -114,30 +91,20 @@ std::vector<TimedEvent> read_events(const std::string& path) {
   std::vector<TimedEvent> out;
   if (!std::filesystem::is_directory(path)) return out;
   const std::string file = path + "/events.csv";
-  std::ifstream in(file);
-  if (!in) return out;
-  std::string line;
-  // a killed run of an old rubdyn left it empty (the header was still buffered): no events
-  if (!std::getline(in, line)) return out;
-  const auto header = split_csv_line(line);
-  int tc = -1, kc = -1;
-  for (std::size_t c = 0; c < header.size(); ++c) {
-    if (header[c] == "t") tc = static_cast<int>(c);
-    if (header[c] == "kind") kc = static_cast<int>(c);
-  }
+  if (!std::filesystem::exists(file)) return out;
+  // a header-only or empty file (a killed run): no events; a cut last row is dropped (the time
+  // series reader warns)
+  const CsvTable table = read_csv(file, true);
+  if (table.header.empty()) return out;
+  const int tc = table.column("t"), kc = table.column("kind");
   if (tc < 0 || kc < 0)
     throw std::runtime_error(fmt::format("{}:1: needs columns t and kind", file));
-  int lineno = 1;
-  while (std::getline(in, line)) {
-    ++lineno;
-    if (line.empty()) continue;
-    if (in.eof()) break;  // no line end: cut short (the time series reader warns)
-    const auto f = split_csv_line(line);
+  for (std::size_t k = 0; k < table.rows.size(); ++k) {
     double t;
-    if (static_cast<int>(f.size()) <= std::max(tc, kc) || !parse_number(f[tc], t)) {
-      throw std::runtime_error(fmt::format("{}:{}: malformed event row", file, lineno));
+    if (!parse_number(table.rows[k][tc], t)) {
+      throw std::runtime_error(fmt::format("{}:{}: malformed event row", file, table.line_of[k]));
     }
-    out.push_back({t, f[kc]});
+    out.push_back({t, table.rows[k][kc]});
   }
   return out;
 }

@@ -23,24 +23,6 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-double number(const std::string& s, const std::string& file, long line, const std::string& col) {
-  char* end = nullptr;
-  const double x = std::strtod(s.c_str(), &end);
-  if (s.empty() || end != s.c_str() + s.size()) {
-    throw std::runtime_error(
-        fmt::format("{}:{}: column {}: '{}' is not a number", file, line, col, s));
-  }
-  return x;
-}
-
-Phase phase_of(const std::string& s, const std::string& file, long line) {
-  for (int k = 0; k < kNumPhases; ++k) {
-    if (s == to_string(static_cast<Phase>(k))) return static_cast<Phase>(k);
-  }
-  throw std::runtime_error(fmt::format(
-      "{}:{}: column phase: '{}' is not a phase (free, slip+, slip-, stick)", file, line, s));
-}
-
 // Time-weighted fraction of [t0, t1] where pred(i) holds; sample i holds over [t_i, t_{i+1}).
 template <class Pred>
 double fraction(const std::vector<DerivedSample>& d, double t0, double t1, Pred pred) {
@@ -185,77 +167,6 @@ std::string_view to_string(Regime r) {
     case Regime::Rolling: return "rolling";
   }
   return "?";
-}
-
-RunRecord read_run(const std::string& dir) {
-  namespace fs = std::filesystem;
-  RunRecord r;
-  r.dir = dir;
-  const std::string case_path = (fs::path(dir) / "case.resolved.toml").string();
-  const std::string ts_path = (fs::path(dir) / "timeseries.csv").string();
-  if (!fs::is_directory(dir)) throw std::runtime_error(dir + ": not an output folder");
-  if (!fs::exists(case_path)) throw std::runtime_error(case_path + ": missing");
-  r.spec = load_case(case_path);
-  std::ifstream f(ts_path);
-  if (!f) throw std::runtime_error(ts_path + ": cannot open");
-  std::string line;
-  if (!std::getline(f, line)) throw std::runtime_error(ts_path + ":1: empty file");
-  const auto header = split_csv_line(line);
-  static const char* kCols[] = {"t",    "x_b",  "y_b",  "x_r",  "y_r",  "theta", "x_s",
-                                "y_s",  "vx_b", "vy_b", "vx_r", "vy_r", "omega", "vx_s",
-                                "vy_s", "d_N",  "v_N",  "v_t",  "F_N",  "F_T",   "phase"};
-  std::vector<int> at(std::size(kCols), -1);
-  for (size_t c = 0; c < std::size(kCols); ++c) {
-    for (size_t h = 0; h < header.size(); ++h)
-      if (header[h] == kCols[c]) at[c] = static_cast<int>(h);
-    if (at[c] < 0) {
-      throw std::runtime_error(
-          fmt::format("{}:1: column '{}' missing (rubdyn output expected)", ts_path, kCols[c]));
-    }
-  }
-  long ln = 1;
-  while (std::getline(f, line)) {
-    ++ln;
-    if (line.empty()) continue;
-    if (f.eof()) {  // no line end: cut short
-      r.warnings.push_back(cut_row_warning(ts_path, ln));
-      break;
-    }
-    const auto v = split_csv_line(line);
-    if (v.size() != header.size()) {
-      throw std::runtime_error(
-          fmt::format("{}:{}: {} fields, header has {}", ts_path, ln, v.size(), header.size()));
-    }
-    Sample s;
-    auto num = [&](int c) { return number(v[at[c]], ts_path, ln, kCols[c]); };
-    s.t = num(0);
-    for (int i = 0; i < kNumDofs; ++i) {
-      s.q[i] = num(1 + i);
-      s.v[i] = num(8 + i);
-    }
-    s.d_N = num(15);
-    s.v_N = num(16);
-    s.v_t = num(17);
-    s.F_N = num(18);
-    s.F_T = num(19);
-    s.phase = phase_of(v[at[20]], ts_path, ln);
-    if (!r.samples.empty() && s.t < r.samples.back().t) {
-      throw std::runtime_error(fmt::format("{}:{}: t = {} goes back in time", ts_path, ln, s.t));
-    }
-    r.samples.push_back(s);
-  }
-  std::ifstream ev((fs::path(dir) / "events.csv").string());
-  if (ev) {
-    if (!std::getline(ev, line)) {
-      r.warnings.push_back(dir + "/events.csv: empty (no header): read as no events");
-    }
-    while (std::getline(ev, line))
-      if (!line.empty() && !ev.eof()) ++r.events;  // a row without line end was cut short
-  }
-  std::ifstream sj((fs::path(dir) / "summary.json").string());
-  std::string text((std::istreambuf_iterator<char>(sj)), std::istreambuf_iterator<char>());
-  r.complete = text.find("\"complete\": true") != std::string::npos;
-  return r;
 }
 
 std::vector<DerivedSample> derive(const RunRecord& r) {

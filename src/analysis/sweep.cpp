@@ -18,6 +18,7 @@
 
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/output_folder.hpp"
+#include "rubdyn/io/output_reader.hpp"
 #include "rubdyn/io/simulate.hpp"
 #include "rubdyn/io/solver_registry.hpp"
 #include "rubdyn/io/text_files.hpp"
@@ -76,8 +77,7 @@ std::string file_text(const std::string& path) {
 
 /// --resume: the folder holds a complete run of exactly this resolved case.
 bool already_done(const CaseSpec& spec, const std::string& dir) {
-  return file_text(dir + "/summary.json").find("\"complete\": true") != std::string::npos &&
-         file_text(dir + "/case.resolved.toml") == to_toml(spec);
+  return run_complete(dir) && file_text(dir + "/case.resolved.toml") == to_toml(spec);
 }
 
 OneRun run_point(const CaseSpec& spec, const std::string& dir, const AnalysisOptions& ao,
@@ -413,17 +413,13 @@ long merge_sweep_shards(const std::string& out) {
       throw std::runtime_error(
           fmt::format("{}: points_total {} differs from {} of shard 1", side.string(), t, total));
     total = t;
-    std::ifstream f(shards[i]);
-    std::string line;
-    if (!std::getline(f, line)) throw std::runtime_error(shards[i].string() + ": empty");
-    if (header.empty()) header = line;
-    if (line != header)
+    const CsvTable table = read_csv(shards[i].string());
+    if (header.empty()) header = table.header_text;
+    if (table.header_text != header)
       throw std::runtime_error(shards[i].string() + ":1: header differs from shard 1's");
-    long ln = 1;
-    while (std::getline(f, line)) {
-      ++ln;
-      if (line.empty()) continue;
-      const std::string first = line.substr(0, line.find(','));
+    for (std::size_t k = 0; k < table.rows.size(); ++k) {
+      const std::string& first = table.rows[k][0];
+      const long ln = table.line_of[k];
       char* end = nullptr;
       errno = 0;
       const long idx = std::strtol(first.c_str(), &end, 10);
@@ -433,8 +429,10 @@ long merge_sweep_shards(const std::string& out) {
       if (lines.count(idx))
         throw std::runtime_error(
             fmt::format("{}:{}: point {} appears twice", shards[i].string(), ln, idx));
-      lines[idx] = line;
+      lines[idx] = table.text[k];
     }
+    if (!table.warnings.empty())
+      throw std::runtime_error(table.warnings.front() + " (a shard must be complete to merge)");
   }
   std::vector<long> missing;
   for (long p = 0; p < total; ++p)

@@ -42,22 +42,11 @@
 
 #include "rubdyn/core/run_types.hpp"
 #include "rubdyn/io/case_spec.hpp"
+#include "rubdyn/io/output_reader.hpp"
 
 namespace rubdyn {
 
-/// A run read back from its output folder.
-struct RunRecord {
-  std::string dir;
-  CaseSpec spec;                ///< case.resolved.toml
-  std::vector<Sample> samples;  ///< timeseries.csv, in file order
-  long events = 0;              ///< rows of events.csv (0 if absent)
-  bool complete = true;         ///< summary.json "complete" (false: ended early or absent)
-  /// What the reader tolerated: a last row without its line end (a killed run), dropped; an
-  /// empty events.csv. The CLI prints them.
-  std::vector<std::string> warnings;
-};
-/// Throws std::runtime_error naming the file, line and problem on a missing or bad file.
-RunRecord read_run(const std::string& dir);
+// RunRecord and read_run (the output folder read back): rubdyn/io/output_reader.hpp
 
 enum class Whirl { None, Forward, Backward };
 enum class Regime { Free, Sliding, Rolling };
