@@ -18,6 +18,7 @@
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/solver_registry.hpp"
+#include "rubdyn/io/text_files.hpp"
 #include "rubdyn/stepping/fixed_step.hpp"
 
 namespace rubdyn {
@@ -499,23 +500,7 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
 }
 
 std::string toml_quote(std::string_view text) {
-  std::string out = "\"";
-  for (const char ch : text) {
-    switch (ch) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
-      case '\r': out += "\\r"; break;
-      default:
-        if (static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f) {
-          out += fmt::format("\\u{:04X}", static_cast<unsigned>(static_cast<unsigned char>(ch)));
-        } else {
-          out += ch;
-        }
-    }
-  }
-  return out + "\"";
+  return quoted_string(text);
 }
 
 std::string to_toml(const CaseSpec& c) {

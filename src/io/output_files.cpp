@@ -38,24 +38,9 @@ void write_or_throw(std::FILE* f, const std::string& text, const std::string& pa
   }
 }
 
+/// A JSON string: the same escaping as a TOML basic string (quoted_string, text_files.hpp).
 std::string json_string(std::string_view s) {
-  std::string out = "\"";
-  for (const char ch : s) {
-    switch (ch) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
-      case '\r': out += "\\r"; break;
-      default:
-        if (static_cast<unsigned char>(ch) < 0x20) {
-          out += fmt::format("\\u{:04x}", static_cast<unsigned>(ch));
-        } else {
-          out += ch;
-        }
-    }
-  }
-  return out + "\"";
+  return quoted_string(s);
 }
 
 /// JSON has no NaN or infinity: they are written as null.

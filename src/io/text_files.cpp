@@ -39,6 +39,26 @@ std::vector<std::string> split_csv_line(const std::string& line) {
   return out;
 }
 
+std::string quoted_string(std::string_view text) {
+  std::string out = "\"";
+  for (const char ch : text) {
+    switch (ch) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      case '\r': out += "\\r"; break;
+      default:
+        if (static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f) {
+          out += fmt::format("\\u{:04X}", static_cast<unsigned>(static_cast<unsigned char>(ch)));
+        } else {
+          out += ch;
+        }
+    }
+  }
+  return out + "\"";
+}
+
 std::string cut_row_warning(const std::string& file, long line) {
   return fmt::format(
       "{}:{}: the last row has no line end (the run was cut short while writing it): ignored", file,

@@ -463,31 +463,6 @@ TEST_CASE("The steps taken depend neither on the output grid nor on the end time
   }
 }
 
-namespace {
-/// Free fall on dof 1 above the plane y = 0 (PaddedModel's contact), with no spin coordinate,
-/// claiming `n` contacts.
-class FallingPoint final : public rubdyn::testing::PaddedModel {
- public:
-  explicit FallingPoint(int n) : PaddedModel(ContactLaw{}, 1.0), n_(n) {}
-  std::string_view name() const override { return "falling point"; }
-  void smooth_forces(double, const Vec7&, const Vec7&, Vec7& f) const override {
-    f.setZero();
-    f[1] = -9.81;
-  }
-  void smooth_force_jacobians(double, const Vec7&, const Vec7&, Mat7& dfdq,
-                              Mat7& dfdv) const override {
-    dfdq.setZero();
-    dfdv.setZero();
-  }
-  double potential_energy(const Vec7& q) const override { return 9.81 * q[1]; }
-  SmoothPower smooth_power(double, const Vec7&, const Vec7&) const override { return {}; }
-  int contact_count() const override { return n_; }
-
- private:
-  int n_;
-};
-}  // namespace
-
 TEST_CASE("The solver asks the model for its spin coordinate and its number of contacts",
           "[events]") {
   MechanicalState s0;
@@ -496,12 +471,13 @@ TEST_CASE("The solver asks the model for its spin coordinate and its number of c
   EventDrivenOptions opt;
   opt.omega_lim = 1.0;  // would be crossed at once if coordinate 4 were taken as the spin
   MemorySink sink;
-  const RunSummary s = run_event_driven(FallingPoint(1), s0, 0.1, opt, sink);
+  const RunSummary s = run_event_driven(rubdyn::testing::FreeFall(1), s0, 0.1, opt, sink);
   REQUIRE(s.complete());
   CHECK(s.omega_max == 0.0);
   CHECK(std::isnan(s.t_omega_lim));
   // more than one contact is refused, not silently reduced to one
-  CHECK_THROWS_AS(run_event_driven(FallingPoint(2), s0, 0.1, opt, sink), std::invalid_argument);
+  CHECK_THROWS_AS(run_event_driven(rubdyn::testing::FreeFall(2), s0, 0.1, opt, sink),
+                  std::invalid_argument);
 }
 
 TEST_CASE("Coulomb-damped oscillator: slip reversals and the final stick, with their kinds",

@@ -37,24 +37,6 @@ const Sample& at(const MemorySink& s, double t) {
   return *best;
 }
 
-/// Free fall on dof 1 whose force turns NaN after t = 0.01 (a model failing mid-run).
-class PoisonedFall final : public rubdyn::testing::PaddedModel {
- public:
-  PoisonedFall() : PaddedModel(ContactLaw{}, 1.0) {}
-  std::string_view name() const override { return "poisoned fall"; }
-  void smooth_forces(double t, const Vec7&, const Vec7&, Vec7& f) const override {
-    f.setZero();
-    f[1] = t > 0.01 ? std::numeric_limits<double>::quiet_NaN() : -9.81;
-  }
-  void smooth_force_jacobians(double, const Vec7&, const Vec7&, Mat7& dfdq,
-                              Mat7& dfdv) const override {
-    dfdq.setZero();
-    dfdv.setZero();
-  }
-  double potential_energy(const Vec7& q) const override { return 9.81 * q[1]; }
-  SmoothPower smooth_power(double, const Vec7&, const Vec7&) const override { return {}; }
-};
-
 }  // namespace
 
 TEST_CASE("Stepper contract: order 2 without contact", "[stepping][contract]") {
@@ -135,7 +117,7 @@ TEST_CASE("Stepper contract: bad h is rejected before any step", "[stepping][con
 TEST_CASE("Stepper contract: a non-finite model ends the step with a typed outcome",
           "[stepping][contract]") {
   const FixedStepScheme scheme = any_scheme();
-  const PoisonedFall m;
+  const rubdyn::testing::FreeFall m(1, 0.01);  // its force turns NaN after t = 0.01
   MechanicalState s0;
   s0.q[1] = 1.0;
   FixedStepOptions o;

@@ -3,6 +3,7 @@
 // no force, and stay at rest). Every solver is tested on them through the same interface as the
 // rotor-stator model.
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "rubdyn/model/lagrangian_model.hpp"
@@ -226,6 +227,31 @@ class BlockOnBelt final : public PaddedModel {
 
  private:
   double k_, v_b_, g_;
+};
+
+/// Free fall on dof 1 above the plane y = 0 (PaddedModel's contact) with no spin coordinate,
+/// claiming `contacts` contacts; its force turns NaN after t_poison (a model failing mid-run).
+class FreeFall final : public PaddedModel {
+ public:
+  explicit FreeFall(int contacts = 1, double t_poison = std::numeric_limits<double>::infinity())
+      : PaddedModel(ContactLaw{}, 1.0), contacts_(contacts), t_poison_(t_poison) {}
+  std::string_view name() const override { return "free fall"; }
+  void smooth_forces(double t, const Vec7&, const Vec7&, Vec7& f) const override {
+    f.setZero();
+    f[1] = t > t_poison_ ? std::numeric_limits<double>::quiet_NaN() : -9.81;
+  }
+  void smooth_force_jacobians(double, const Vec7&, const Vec7&, Mat7& dfdq,
+                              Mat7& dfdv) const override {
+    dfdq.setZero();
+    dfdv.setZero();
+  }
+  double potential_energy(const Vec7& q) const override { return 9.81 * q[1]; }
+  SmoothPower smooth_power(double, const Vec7&, const Vec7&) const override { return {}; }
+  int contact_count() const override { return contacts_; }
+
+ private:
+  int contacts_;
+  double t_poison_;
 };
 
 }  // namespace rubdyn::testing
