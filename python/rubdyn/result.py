@@ -143,7 +143,8 @@ def _read_events(path):
 
 
 def read(out_dir):
-    """Reads an output folder written by `rubdyn run` (timeseries.csv, events.csv, summary.json).
+    """Reads an output folder written by `rubdyn run` (timeseries.csv, events.csv, summary.json;
+    .case from case.resolved.toml, None without it).
     A run that died keeps its rows: a cut last row is dropped with a warning, a missing
     summary.json gives summary None (with a warning)."""
     out_dir = os.fspath(out_dir)
@@ -160,4 +161,12 @@ def read(out_dir):
     else:
         warnings.warn(f"{out_dir}: no summary.json (the run did not finish)", RuntimeWarning,
                       stacklevel=2)
-    return Result(columns, events, summary, source=out_dir)
+    case = None
+    resolved = os.path.join(out_dir, "case.resolved.toml")
+    if os.path.exists(resolved):
+        from . import _core
+        try:
+            case = _core.load_case(resolved, [])
+        except _core.CaseError as err:  # written by another version of rubdyn
+            warnings.warn(f"{resolved}: not loaded ({err})", RuntimeWarning, stacklevel=2)
+    return Result(columns, events, summary, case=case, source=out_dir)
