@@ -66,13 +66,9 @@ def run(case, solver=None, rtol=None, atol=None, h=None, t_end=None, method=None
                        ("run.t_end", t_end), ("output.every", output_every)):
         if value is None:
             continue
-        # strings pass through as the CLI would receive them; solver kinds are TOML strings
-        if key in ("solver.kind", "solver.method"):
-            sets.append(f'{key}="{value}"')
-        elif isinstance(value, str):
-            sets.append(f"{key}={value}")
-        else:
-            sets.append(f"{key}={value!r}")
+        # as cmd_run.cpp writes them: "solver.kind=" + text (a bare word is read as a string);
+        # a float's repr is its shortest round-trip text, so it reads back to the same double
+        sets.append(f"{key}={value}" if isinstance(value, str) else f"{key}={value!r}")
     if sets:
         case = _core.with_overrides(case, sets)
     columns, events, summary_json = _core.run(case, progress, float(progress_interval))
@@ -98,10 +94,6 @@ class Comparison(dict):
 
     def __str__(self):
         return self.report
-
-
-_STANDARD = ("t",) + tuple(_core.DOF_NAMES) + tuple(_core.VEL_NAMES) + (
-    "d_N", "v_N", "v_t", "F_N", "F_T")
 
 
 def _as_series(x, name):

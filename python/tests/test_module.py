@@ -3,7 +3,6 @@ output folder, reading folders (cut rows, header-only events), compare and campb
 tools compute them, the model's mechanics."""
 import json
 import math
-import os
 import shutil
 import warnings
 

@@ -1,6 +1,5 @@
 """rubdyn.plot: every figure is written and non-empty, from a folder and from a run; decimation
 keeps events, phase changes and the extremes."""
-import os
 import subprocess
 import sys
 
