@@ -7,8 +7,10 @@ output folder and returns a Figure.
     contact(res)   d_N / g0 and F_N
     friction(res)  v_t and the friction torque over the driving torque
     timeline(res)  phases (free / slip+ / slip- / stick) as bands, events as marks by kind
+    spectrogram(d) the orbit's spectrogram with the Campbell overlay, from `rubdyn analyze`
 
-    python3 -m rubdyn.plot OUT_DIR [--png DIR]     writes every figure as PNG (default: OUT_DIR)
+    python3 -m rubdyn.plot OUT_DIR [--png DIR]     writes every figure as PNG (default: OUT_DIR),
+                                                   the spectrogram when OUT_DIR/analysis has one
 
 Long runs are decimated for drawing (decimate()): per bin the first, last, min and max sample of
 every drawn column, plus every sample at an event time; events and phase changes are drawn from the
@@ -312,6 +314,47 @@ def timeline(res):
     return fig
 
 
+def spectrogram(analysis_dir, f_max=None):
+    """The orbit's spectrogram (whirl frequency: forward > 0, backward < 0) with the Campbell
+    frequencies at each frame's spin speed, from the folder `rubdyn analyze` writes (default
+    OUT_DIR/analysis: spectrogram.csv, campbell.csv). Amplitudes on a log colour scale."""
+    import matplotlib.patheffects as pe
+    from matplotlib.colors import LogNorm
+    plt = _plt()
+    d = np.loadtxt(os.path.join(analysis_dir, "spectrogram.csv"), delimiter=",", skiprows=1,
+                   ndmin=2)
+    t, f = np.unique(d[:, 0]), np.unique(d[:, 1])
+    amp = np.full((len(f), len(t)), np.nan)
+    amp[np.searchsorted(f, d[:, 1]), np.searchsorted(t, d[:, 0])] = d[:, 2]
+    fig, ax = plt.subplots(figsize=(8, 5), layout="constrained")
+    positive = amp[np.isfinite(amp) & (amp > 0)]
+    top = positive.max() if positive.size else 1.0
+    # four decades below the peak: the whirl lines stand out, the windowing floor does not
+    mesh = ax.pcolormesh(t, f, np.where(amp > 0, amp, np.nan), shading="nearest", cmap="magma_r",
+                         norm=LogNorm(vmin=top * 1e-4, vmax=top))
+    fig.colorbar(mesh, ax=ax, label="orbit amplitude [m]")
+    cp = os.path.join(analysis_dir, "campbell.csv")
+    if os.path.exists(cp):
+        c = np.genfromtxt(cp, delimiter=",", names=True)
+        for name, style in (("f1f", "-"), ("f2f", "--"), ("f1b", "-"), ("f2b", "--")):
+            color = "#1565c0" if name.endswith("f") else "#2e7d32"
+            # a white halo: the first modes (about +-100 Hz) lie on the darkest part
+            ax.plot(c["t"], c[name], ls=style, color=color, lw=1.6,
+                    path_effects=[pe.Stroke(linewidth=3.2, foreground="white"), pe.Normal()],
+                    label=f"Campbell {name} ({'forward' if name.endswith('f') else 'backward'})")
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2, fontsize=8,
+                  frameon=False)
+    if f_max is not None:
+        ax.set_ylim(-f_max, f_max)
+    ax.axhline(0.0, color="0.5", lw=0.5)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("whirl frequency [Hz] (forward > 0)")
+    fig.suptitle(f"Spectrogram of the orbit with the Campbell frequencies: "
+                 f"{os.path.basename(os.path.dirname(os.path.abspath(analysis_dir)))}",
+                 fontsize=11)
+    return fig
+
+
 FIGURES = {"omega": omega, "orbit": orbit, "contact": contact, "friction": friction,
            "timeline": timeline}
 
@@ -325,6 +368,13 @@ def write_all(res, out_dir, dpi=130):
     for name, make in FIGURES.items():
         fig = make(res)
         path = os.path.join(out_dir, f"{name}.png")
+        fig.savefig(path, dpi=dpi)
+        plt.close(fig)
+        paths.append(path)
+    analysis = os.path.join(str(res.source or ""), "analysis")
+    if res.source and os.path.exists(os.path.join(analysis, "spectrogram.csv")):
+        fig = spectrogram(analysis)  # written by `rubdyn analyze OUT_DIR`
+        path = os.path.join(out_dir, "spectrogram.png")
         fig.savefig(path, dpi=dpi)
         plt.close(fig)
         paths.append(path)

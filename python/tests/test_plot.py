@@ -1,5 +1,6 @@
 """rubdyn.plot: every figure is written and non-empty, from a folder and from a run; decimation
 keeps events, phase changes and the extremes."""
+import shutil
 import subprocess
 import sys
 
@@ -16,12 +17,17 @@ import rubdyn.plot as rp  # noqa: E402
 from conftest import REFERENCE  # noqa: E402
 
 
-def test_command_writes_every_figure(cli_reference_out, tmp_path):
+def test_command_writes_every_figure(cli, cli_reference_out, tmp_path):
+    # `rubdyn analyze` adds the spectrogram (OUT_DIR/analysis), drawn with the Campbell overlay
+    out = tmp_path / "run"
+    shutil.copytree(cli_reference_out, out)
+    a = subprocess.run([cli, "analyze", str(out)], capture_output=True, text=True, check=False)
+    assert a.returncode == 0, a.stderr
     png = tmp_path / "png"
-    p = subprocess.run([sys.executable, "-m", "rubdyn.plot", str(cli_reference_out), "--png",
+    p = subprocess.run([sys.executable, "-m", "rubdyn.plot", str(out), "--png",
                         str(png)], capture_output=True, text=True, check=False)
     assert p.returncode == 0, p.stderr
-    for name in rp.FIGURES:
+    for name in list(rp.FIGURES) + ["spectrogram"]:
         path = png / f"{name}.png"
         assert path.exists(), name
         # a PNG of a drawn figure at 130 dpi is tens of kB; an empty canvas compresses to ~5 kB
