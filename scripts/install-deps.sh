@@ -17,6 +17,8 @@ packages=(
   libcli11-dev         # command line
   libbenchmark-dev     # Google Benchmark (bench/)
   python3-matplotlib python3-numpy python3-scipy   # figures and studies in validation/
+  pybind11-dev python3-pybind11 python3-dev   # the Python module rubdyn (python/)
+  python3-pytest       # its tests (python/tests, run through ctest)
 )
 
 if [ "${1:-}" = "--peer" ]; then
