@@ -16,6 +16,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "rubdyn/core/demand.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/output_folder.hpp"
 #include "rubdyn/io/simulate.hpp"
@@ -280,6 +281,7 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
     throw std::invalid_argument(text);
   }
   const auto all = sweep_points(o.vary);
+  RUBDYN_DEMAND(static_cast<double>(all.size()) == count);  // the product, as counted above
   // validate every point first: a bad value stops the sweep before anything is written
   std::vector<CaseSpec> specs;
   specs.reserve(all.size());

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "rubdyn/core/demand.hpp"
 #include "rubdyn/core/run_monitor.hpp"
 
 namespace rubdyn {
@@ -521,6 +522,7 @@ RunSummary FixedStepRunner::run(const MechanicalState& init, double t_end) {
   // steps: with h the span over that number the last step ends at t_end (to round-off).
   const long n_steps = std::max(1L, std::lround((t_end - init.t) / h_));
   h_ = (t_end - init.t) / static_cast<double>(n_steps);
+  RUBDYN_DEMAND(h_ > 0.0 && n_steps <= kMaxFixedSteps);  // run_fixed_step checked the options
   if (carpenter) {
     // Start-up: q_1 = q_0 + h v_0 + h^2/2 a_0 with a_0 the contact-free acceleration, i.e. the
     // scheme applied at i = 0 with a fictitious q_{-1} = q_0 - h v_0 + h^2/2 a_0: then the
