@@ -581,3 +581,13 @@ TEST_CASE("Contract: a run that reaches no sample after SIGTERM still ends (grac
   CHECK(((WIFEXITED(st) && WEXITSTATUS(st) == 4) || (WIFSIGNALED(st) && WTERMSIG(st) == SIGALRM)));
   fs::remove_all(dir);
 }
+
+TEST_CASE("Contract: results on a full standard output are a failed write, not exit 0",
+          "[contract][cli]") {
+  const fs::path err = fresh_dir("full-stdout");
+  const int st = std::system(
+      (std::string(RUBDYN_CLI) + " check " + sh(kRef) + " 2> " + sh(err) + " > /dev/full").c_str());
+  CHECK((WIFEXITED(st) && WEXITSTATUS(st) == 5));
+  CHECK(has(slurp(err), "standard output"));
+  fs::remove(err);
+}
