@@ -591,3 +591,39 @@ TEST_CASE("Contract: results on a full standard output are a failed write, not e
   CHECK(has(slurp(err), "standard output"));
   fs::remove(err);
 }
+
+TEST_CASE("Contract: SIGINT ends a sweep with its table, the points not run listed, exit 4",
+          "[contract][cli]") {
+  // 4 points of 100 s each on one thread: minutes of work, so the signal (sent once the first
+  // point has rows on disk) always comes first
+  const fs::path dir = fresh_dir("sweep-int");
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const int null = ::open("/dev/null", O_WRONLY);
+    ::dup2(null, 1);
+    ::dup2(null, 2);
+    ::execl(RUBDYN_CLI, RUBDYN_CLI, "sweep", kRef.c_str(), "--quiet", "--t-end", "100", "--jobs",
+            "1", "--vary", "contact.mu=0.1,0.11,0.12,0.13", "--out", dir.c_str(),
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  REQUIRE(pid > 0);
+  const auto t0 = std::chrono::steady_clock::now();
+  auto rows_on_disk = [&] {
+    std::error_code ec;
+    const auto n = fs::file_size(dir / "p0000" / "timeseries.csv", ec);
+    return !ec && n >= 8192;
+  };
+  while (!rows_on_disk() && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  ::kill(pid, SIGINT);
+  CHECK(wait_exit(pid) == 4);
+  const std::string table = slurp(dir / "sweep.csv");
+  CHECK(has(table, ",interrupted,no,"));
+  std::size_t not_run = 0;
+  for (auto p = table.find(",not_run,"); p != std::string::npos; p = table.find(",not_run,", p + 1))
+    ++not_run;
+  CHECK(not_run == 3);
+  CHECK(has(slurp(dir / "p0000" / "summary.json"), "\"termination\": \"interrupted\""));
+  fs::remove_all(dir);
+}
