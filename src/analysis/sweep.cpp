@@ -16,6 +16,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "rubdyn/core/demand.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/output_folder.hpp"
 #include "rubdyn/io/output_reader.hpp"
@@ -81,7 +82,7 @@ bool already_done(const CaseSpec& spec, const std::string& dir) {
 }
 
 OneRun run_point(const CaseSpec& spec, const std::string& dir, const AnalysisOptions& ao,
-                 bool resume) {
+                 bool resume, const std::atomic<bool>* stop) {
   OneRun r;
   if (resume && already_done(spec, dir)) {
     r.termination = std::string(to_string(Termination::Completed));
@@ -93,7 +94,7 @@ OneRun run_point(const CaseSpec& spec, const std::string& dir, const AnalysisOpt
       std::string write_error;
       {
         OutputFolder sink(dir, spec);
-        s = simulate(spec, sink);
+        s = simulate(spec, sink, {}, stop);
         write_error = sink.error();
       }
       r.termination = std::string(to_string(s.termination));
@@ -279,6 +280,7 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
     throw std::invalid_argument(text);
   }
   const auto all = sweep_points(o.vary);
+  RUBDYN_DEMAND(static_cast<double>(all.size()) == count);  // the product, as counted above
   // validate every point first: a bad value stops the sweep before anything is written
   std::vector<CaseSpec> specs;
   specs.reserve(all.size());
@@ -330,14 +332,19 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
       SweepRow& row = rows[k];
       row.point = all[i];
       row.folder = (fs::path(o.out) / fmt::format("p{:04d}", i)).string();
-      const OneRun r = run_point(specs[i], row.folder, o.analysis, o.resume);
+      if (o.stop && o.stop->load()) {  // interrupted: the rest is not run (--resume runs it)
+        row.termination = "not_run";
+        row.message = "the sweep was interrupted before this point";
+        continue;
+      }
+      const OneRun r = run_point(specs[i], row.folder, o.analysis, o.resume, o.stop);
       row.termination = r.termination;
       row.message = r.message;
       row.complete = r.complete;
       row.wall_seconds = r.wall;
       row.v = r.v;
       if (o.certify) {
-        const OneRun t = run_point(tight[k], row.folder + "-tight", o.analysis, o.resume);
+        const OneRun t = run_point(tight[k], row.folder + "-tight", o.analysis, o.resume, o.stop);
         row.certified_run = true;
         row.tight_termination = t.termination;
         row.tight = t.v;

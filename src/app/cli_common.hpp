@@ -2,9 +2,12 @@
 // Command-line options shared by every subcommand that reads a case: the CASE positional and the
 // repeatable override `--set section.key=value` (one override per occurrence, applied in order).
 // load_case(args.path, args.sets) then reads, overrides and validates (io/case_io.hpp).
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <csignal>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -30,13 +33,29 @@ inline std::atomic<bool>& stop_flag() {
   return flag;
 }
 
+/// Seconds a run has, after SIGINT or SIGTERM, to reach its next output sample (the
+/// environment variable RUBDYN_STOP_GRACE, 1 to 3600, changes it; the tests use 1).
+inline unsigned& stop_grace_seconds() {
+  static unsigned seconds = 10;
+  return seconds;
+}
+
 /// SIGINT and SIGTERM raise stop_flag() instead of killing the process, so that a run ends at
 /// its next output sample and writes its summary ("interrupted", exit 4). The handler is reset
-/// on the first signal: a second one kills the process as usual.
+/// on the first signal: a second one kills the process as usual, and so does SIGALRM
+/// (default action) when no sample is reached within stop_grace_seconds(): a run stuck inside one
+/// output interval (say, steps of 1e-15 s) is not made unkillable by `timeout` or Ctrl-C.
 inline void stop_on_signals() {
   static_assert(std::atomic<bool>::is_always_lock_free);
   struct sigaction sa {};
-  sa.sa_handler = [](int) { stop_flag().store(true); };
+  sa.sa_handler = [](int) {
+    stop_flag().store(true);
+    alarm(stop_grace_seconds());  // async-signal-safe
+  };
+  if (const char* g = std::getenv("RUBDYN_STOP_GRACE")) {
+    const long v = std::strtol(g, nullptr, 10);
+    if (v >= 1 && v <= 3600) stop_grace_seconds() = static_cast<unsigned>(v);
+  }
   sigemptyset(&sa.sa_mask);
   sa.sa_flags = SA_RESETHAND;
   sigaction(SIGINT, &sa, nullptr);

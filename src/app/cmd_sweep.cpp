@@ -10,6 +10,7 @@
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "rubdyn/analysis/sweep.hpp"
+#include "rubdyn/core/run_types.hpp"
 #include "rubdyn/io/solver_registry.hpp"
 
 namespace rubdyn::app {
@@ -61,23 +62,35 @@ int sweep_command(const SweepArgs& a) {
       std::fflush(stderr);
     };
   }
+  stop_on_signals();
+  o.stop = &stop_flag();
   const auto rows = run_sweep(o);
   if (tty) std::fprintf(stderr, "\r%60s\r", "");
-  long bad = 0, uncertified = 0;
+  long bad = 0, uncertified = 0, not_run = 0;
   for (const auto& r : rows) {
-    if (!r.complete) {
+    if (r.termination == "not_run") {
+      ++not_run;
+    } else if (!r.complete) {
       ++bad;
       std::fprintf(stderr, "rubdyn sweep: point %ld (%s) ended early: %s: %s\n", r.point.index,
                    r.folder.c_str(), r.termination.c_str(), r.message.c_str());
     }
     if (o.certify && !r.certified) ++uncertified;
   }
-  std::printf("sweep         %zu points run (%s), %ld ended early", rows.size(),
-              o.shard.count > 1 ? a.shard.c_str() : "all", bad);
+  std::printf("sweep         %ld points run (%s), %ld ended early",
+              static_cast<long>(rows.size()) - not_run, o.shard.count > 1 ? a.shard.c_str() : "all",
+              bad);
+  if (not_run > 0) std::printf(", %ld not run (interrupted)", not_run);
   if (o.certify) std::printf(", %ld verdicts depend on the tolerance", uncertified);
   std::printf("\ntable         %s/%s\n", o.out.c_str(),
               o.shard.count > 1 ? "sweep-shard-*.csv (join with rubdyn sweep-merge)" : "sweep.csv");
-  return bad > 0 ? 3 : 0;
+  if (stop_flag().load()) {
+    std::fprintf(stderr,
+                 "rubdyn sweep: interrupted; the table lists the points not run (not_run); "
+                 "run the same command with --resume to complete it\n");
+    return kExitInterrupted;
+  }
+  return bad > 0 ? kExitEarlyEnd : kExitOk;
 }
 
 }  // namespace

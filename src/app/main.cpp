@@ -1,5 +1,7 @@
 // rubdyn: command-line entry point. Nothing but dispatch and the mapping of errors to exit codes.
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 
 #include "commands.hpp"
@@ -27,8 +29,19 @@ int main(int argc, char** argv) {
     const int rc = app.exit(e);  // prints help (rc 0) or the usage error
     return rc == 0 ? 0 : 2;
   }
+  // Results on stdout are output like any file: a failed write there (a full disk behind a
+  // redirection) is exit 5, never a silent exit 0.
+  auto checked_stdout = [](int rc) {
+    errno = 0;
+    if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+      std::fprintf(stderr, "rubdyn: error: cannot write the standard output: %s\n",
+                   errno ? std::strerror(errno) : "write failed");
+      return rc == 0 ? rubdyn::kExitOutput : rc;
+    }
+    return rc;
+  };
   try {
-    return action ? action() : 2;
+    return checked_stdout(action ? action() : 2);
   } catch (const rubdyn::CaseError& e) {
     std::fprintf(stderr, "%s\n", e.what());
     return rubdyn::kExitBadInput;

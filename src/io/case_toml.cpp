@@ -514,7 +514,14 @@ std::string to_toml(const CaseSpec& c) {
       out += fmt::format("\n[{}]\n", section);
     }
     switch (ks.kind) {
-      case Kind::Number: out += fmt::format("{} = {}\n", ks.key, *ks.num(copy)); break;
+      case Kind::Number: {
+        // shortest round-trip digits, always as a TOML float: "-0" would read back as the
+        // integer 0 and lose the sign of -0.0 (found by tests/fuzz)
+        std::string v = fmt::format("{}", *ks.num(copy));
+        if (v.find_first_of(".eEn") == std::string::npos) v += ".0";
+        out += fmt::format("{} = {}\n", ks.key, v);
+        break;
+      }
       case Kind::Integer: out += fmt::format("{} = {}\n", ks.key, *ks.integer(copy)); break;
       case Kind::String: out += fmt::format("{} = {}\n", ks.key, toml_quote(*ks.text(copy))); break;
     }

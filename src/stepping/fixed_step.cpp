@@ -10,6 +10,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "rubdyn/core/demand.hpp"
 #include "rubdyn/core/run_monitor.hpp"
 #include "rubdyn/stepping/stepper.hpp"
 
@@ -155,6 +156,7 @@ RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_
   next_t_out_ = init.t;
   sum_.energy_initial = m_.kinetic_energy(init.q, init.v) + m_.potential_energy(init.q);
   const long n_steps = std::max(1L, std::lround((t_end - init.t) / h));
+  RUBDYN_DEMAND(h > 0.0 && n_steps <= kMaxFixedSteps);  // run_fixed_step checked the options
   stepper.start(init.t, init.q, init.v);
   // the works: smooth loads and dampers by the trapezoidal rule between completed states,
   // contact forces and impulses as each scheme defines them (StepReport::contact_work)

@@ -541,3 +541,89 @@ TEST_CASE("Contract: sweep --resume skips the points already complete for the sa
   CHECK(fs::last_write_time(dir / "p0000" / "timeseries.csv") != t0);
   fs::remove_all(dir);
 }
+
+TEST_CASE("Contract: a run that reaches no sample after SIGTERM still ends (grace period)",
+          "[contract][cli]") {
+  // rotor.Jp = 4294967297 (valid) makes the event solver crawl inside its first output
+  // interval (10 minutes without a sample, measured): SIGTERM must still end the process,
+  // either at a sample (exit 4) or, RUBDYN_STOP_GRACE = 1 s later, by SIGALRM. 30 s bounds
+  // both on a loaded machine; the run itself would take hours.
+  const fs::path dir = fresh_dir("stuck");
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::setenv("RUBDYN_STOP_GRACE", "1", 1);
+    const int null = ::open("/dev/null", O_WRONLY);
+    ::dup2(null, 1);
+    ::dup2(null, 2);
+    ::execl(RUBDYN_CLI, RUBDYN_CLI, "run", kRef.c_str(), "--quiet", "--t-end", "1000", "--set",
+            "rotor.Jp=4294967297", "--out", dir.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  REQUIRE(pid > 0);
+  const auto t0 = std::chrono::steady_clock::now();
+  std::error_code ec;
+  // the headers are flushed once the handler is installed and the folder prepared
+  while (!fs::exists(dir / "events.csv", ec) &&
+         std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  ::kill(pid, SIGTERM);
+  const auto t1 = std::chrono::steady_clock::now();
+  int st = 0;
+  pid_t done = 0;
+  while ((done = ::waitpid(pid, &st, WNOHANG)) == 0 &&
+         std::chrono::steady_clock::now() - t1 < std::chrono::seconds(30))
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  if (done == 0) {  // still running: the contract is broken; do not leave it behind
+    ::kill(pid, SIGKILL);
+    ::waitpid(pid, &st, 0);
+  }
+  CHECK(done == pid);
+  CHECK(((WIFEXITED(st) && WEXITSTATUS(st) == 4) || (WIFSIGNALED(st) && WTERMSIG(st) == SIGALRM)));
+  fs::remove_all(dir);
+}
+
+TEST_CASE("Contract: results on a full standard output are a failed write, not exit 0",
+          "[contract][cli]") {
+  const fs::path err = fresh_dir("full-stdout");
+  const int st = std::system(
+      (std::string(RUBDYN_CLI) + " check " + sh(kRef) + " 2> " + sh(err) + " > /dev/full").c_str());
+  CHECK((WIFEXITED(st) && WEXITSTATUS(st) == 5));
+  CHECK(has(slurp(err), "standard output"));
+  fs::remove(err);
+}
+
+TEST_CASE("Contract: SIGINT ends a sweep with its table, the points not run listed, exit 4",
+          "[contract][cli]") {
+  // 4 points of 100 s each on one thread: minutes of work, so the signal (sent once the first
+  // point has rows on disk) always comes first
+  const fs::path dir = fresh_dir("sweep-int");
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const int null = ::open("/dev/null", O_WRONLY);
+    ::dup2(null, 1);
+    ::dup2(null, 2);
+    ::execl(RUBDYN_CLI, RUBDYN_CLI, "sweep", kRef.c_str(), "--quiet", "--t-end", "100", "--jobs",
+            "1", "--vary", "contact.mu=0.1,0.11,0.12,0.13", "--out", dir.c_str(),
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  REQUIRE(pid > 0);
+  const auto t0 = std::chrono::steady_clock::now();
+  auto rows_on_disk = [&] {
+    std::error_code ec;
+    const auto n = fs::file_size(dir / "p0000" / "timeseries.csv", ec);
+    return !ec && n >= 8192;
+  };
+  while (!rows_on_disk() && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  ::kill(pid, SIGINT);
+  CHECK(wait_exit(pid) == 4);
+  const std::string table = slurp(dir / "sweep.csv");
+  CHECK(has(table, ",interrupted,no,"));
+  std::size_t not_run = 0;
+  for (auto p = table.find(",not_run,"); p != std::string::npos; p = table.find(",not_run,", p + 1))
+    ++not_run;
+  CHECK(not_run == 3);
+  CHECK(has(slurp(dir / "p0000" / "summary.json"), "\"termination\": \"interrupted\""));
+  fs::remove_all(dir);
+}

@@ -14,6 +14,7 @@
 // schemes) or a hundred times tighter rtol and atol (event-driven) in OUT/pNNNN-tight/, and the
 // verdicts (speed limited or not, backward whirl or not, whip or not) of the two runs are
 // compared: "yes" when they agree, "no" when the verdict depends on the tolerance.
+#include <atomic>
 #include <functional>
 #include <string>
 #include <vector>
@@ -76,6 +77,10 @@ struct SweepOptions {
   /// Skip the points whose folder holds a complete summary.json of the same resolved case
   /// (case.resolved.toml equal to this point's): their analysis is redone, not their run.
   bool resume = false;
+  /// When set and true (SIGINT / SIGTERM), running points end at their next sample
+  /// ("interrupted") and the points not started get termination "not_run"; the table is
+  /// written with them, and --resume completes the sweep later.
+  const std::atomic<bool>* stop = nullptr;
   long max_points = kDefaultMaxPoints;  ///< more points are refused (std::invalid_argument)
   /// Called once every option and point is checked, before the first point runs.
   std::function<void(const SweepPlan&)> plan;
@@ -83,7 +88,7 @@ struct SweepOptions {
 
 struct SweepRow {
   SweepPoint point;
-  std::string termination;  ///< "completed", another termination, or "error"
+  std::string termination;  ///< "completed", another termination, "error" or "not_run"
   std::string message;
   bool complete = false;
   RunVerdicts v;
