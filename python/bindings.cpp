@@ -22,6 +22,7 @@
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/output_folder.hpp"
 #include "rubdyn/io/simulate.hpp"
+#include "rubdyn/io/solver_registry.hpp"
 #include "rubdyn/model/rotor_stator_model.hpp"
 
 namespace py = pybind11;
@@ -265,6 +266,24 @@ PYBIND11_MODULE(_core, m) {
         return "<rubdyn.Case " + c.spec.name + " from " + c.spec.source + ">";
       });
 
+  m.def(
+      "solvers",
+      [] {
+        py::list out;
+        for (const auto& e : solver_registry()) {
+          py::dict d;
+          d["name"] = std::string(e.name);
+          d["summary"] = std::string(e.summary);
+          d["fixed_step"] = e.fixed_step;
+          py::list keys;
+          for (const auto k : e.keys) keys.append(std::string(k));
+          d["keys"] = keys;
+          out.append(d);
+        }
+        return out;
+      },
+      "The solver registry (io/solver_registry.hpp): name, summary, fixed_step, the [solver] keys "
+      "each reads");
   m.def("load_case", &make_case_from_file, py::arg("path"),
         py::arg("overrides") = std::vector<std::string>{});
   m.def("parse_case", &make_case_from_text, py::arg("text"), py::arg("source") = "<string>",

@@ -15,7 +15,7 @@ from . import _core
 from ._core import Case, Model, CaseError
 from .result import Result, read, PHASES, EVENT_FIELDS
 
-__all__ = ["load_case", "parse_case", "run", "read", "campbell", "compare", "Case", "Model",
+__all__ = ["load_case", "parse_case", "run", "read", "campbell", "compare", "solvers", "Case", "Model",
            "CaseError", "Result", "Comparison", "PHASES", "EVENT_FIELDS"]
 
 
@@ -71,8 +71,25 @@ def run(case, solver=None, rtol=None, atol=None, h=None, t_end=None, method=None
         sets.append(f"{key}={value}" if isinstance(value, str) else f"{key}={value!r}")
     if sets:
         case = _core.with_overrides(case, sets)
+    # an option the chosen solver does not read is refused, as `rubdyn run` refuses it (the
+    # solver registry says which keys each solver reads)
+    entry = next(e for e in _core.solvers() if e["name"] == case.solver)
+    for key, value in (("solver.rtol", rtol), ("solver.atol", atol), ("solver.method", method),
+                       ("solver.h", h), ("output.every", output_every)):
+        reads = entry["fixed_step"] if key == "output.every" else key in entry["keys"]
+        if value is not None and not reads:
+            users = [e["name"] for e in _core.solvers()
+                     if (e["fixed_step"] if key == "output.every" else key in e["keys"])]
+            raise ValueError(f"solver {case.solver} does not read {key} "
+                             f"(it applies to: {', '.join(users)})")
     columns, events, summary_json = _core.run(case, progress, float(progress_interval))
     return Result.from_core(columns, events, summary_json, case=case)
+
+
+def solvers():
+    """The solver registry: a list of dicts name, summary, fixed_step, keys (the [solver] keys
+    the solver reads), as the case file and the CLI know them."""
+    return _core.solvers()
 
 
 def campbell(case, omega_max=None, points=201, damped=False):

@@ -70,6 +70,19 @@ def test_missing_file_and_bad_solver_option_raise():
         rubdyn.run(case, solver="rk4")
 
 
+def test_an_option_the_solver_does_not_read_is_refused_as_by_the_cli(cli, tmp_path):
+    # the registry's solvers, and the refusal `rubdyn run` gives for --h with the event solver
+    names = [e["name"] for e in rubdyn.solvers()]
+    assert names[0] == "event" and "mj" in names
+    case = rubdyn.load_case(REFERENCE, overrides={"run.t_end": 0.001})
+    with pytest.raises(ValueError, match="solver event does not read solver.h"):
+        rubdyn.run(case, h=1e-6)
+    with pytest.raises(ValueError, match="solver mj does not read solver.rtol"):
+        rubdyn.run(case, solver="mj", rtol=1e-8)
+    proc = run_cli(cli, "run", REFERENCE, "--h", "1e-6", "--out", str(tmp_path / "x"))
+    assert proc.returncode == 2 and "solver event does not read solver.h" in proc.stderr
+
+
 # --- runs equal to the CLI's, bit for bit -------------------------------------------------------
 
 def test_run_equals_the_cli_bitwise(cli_reference_out):
