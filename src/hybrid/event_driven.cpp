@@ -553,8 +553,32 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
 
 }  // namespace
 
+std::vector<OptionProblem> event_driven_option_problems(const EventDrivenOptions& o) {
+  std::vector<OptionProblem> bad;
+  auto num = [](double x) { return fmt::format("{:.17g}", x); };
+  if (!(std::isfinite(o.rtol) && o.rtol > 0.0))
+    bad.push_back({"rtol", num(o.rtol), "must be finite and > 0"});
+  if (!(std::isfinite(o.atol) && o.atol > 0.0))
+    bad.push_back({"atol", num(o.atol), "must be finite and > 0"});
+  if (!(std::isfinite(o.output_dt) && o.output_dt > 0.0))
+    bad.push_back({"output_dt", num(o.output_dt), "must be finite and > 0"});
+  if (!(std::isfinite(o.omega_lim) && o.omega_lim >= 0.0))
+    bad.push_back({"omega_lim", num(o.omega_lim), "must be finite and >= 0 (0: none)"});
+  if (!(o.max_events_per_second > 0.0))
+    bad.push_back({"max_events_per_second", num(o.max_events_per_second), "must be > 0"});
+  if (o.max_steps_per_call < 1)
+    bad.push_back({"max_steps_per_call", fmt::format("{}", o.max_steps_per_call), "must be >= 1"});
+  return bad;
+}
+
 RunSummary run_event_driven(const LagrangianModel& model, const MechanicalState& initial,
                             double t_end, const EventDrivenOptions& opt, OutputSink& sink) {
+  const auto bad = event_driven_option_problems(opt);
+  if (!bad.empty()) {
+    std::string text = "invalid event-driven options:";
+    for (const auto& b : bad) text += fmt::format("\n  {} = {}: {}", b.option, b.value, b.rule);
+    throw std::invalid_argument(text);
+  }
   if (model.contact_count() != 1)
     throw std::invalid_argument(
         fmt::format("the event-driven solver handles one contact; model '{}' has {}", model.name(),

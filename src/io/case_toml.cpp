@@ -15,6 +15,7 @@
 #include <set>
 #include <sstream>
 
+#include "rubdyn/hybrid/event_driven.hpp"
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/solver_registry.hpp"
@@ -389,10 +390,24 @@ class Loader {
       issue("solver.projection", at("solver.projection"), "\"" + so.projection + "\"",
             "must be mass or identity");
     }
-    rule(so.rtol > 0, "solver.rtol", so.rtol, "must be > 0");
-    rule(so.atol > 0, "solver.atol", so.atol, "must be > 0");
-    rule(so.max_events_per_second > 0, "solver.max_events_per_second", so.max_events_per_second,
-         "must be > 0");
+    // The event-driven options: the rules are stated once, in hybrid/event_driven.cpp.
+    {
+      EventDrivenOptions eo;
+      eo.rtol = so.rtol;
+      eo.atol = so.atol;
+      eo.max_events_per_second = so.max_events_per_second;
+      eo.output_dt = c.output.dt;
+      static const std::map<std::string, std::string> key_of = {
+          {"rtol", "solver.rtol"},
+          {"atol", "solver.atol"},
+          {"max_events_per_second", "solver.max_events_per_second"}};
+      for (const auto& p : event_driven_option_problems(eo)) {
+        if (!key_of.count(p.option)) continue;  // output_dt: the fixed-step rules report it
+        const std::string& key = key_of.at(p.option);
+        const toml::node* n = at(key);
+        issue(key, n, n ? node_text(*n) : p.value + " (default)", p.rule);
+      }
+    }
     // The fixed-step options: the rules are stated once, in stepping/fixed_step.cpp. The step
     // count rules (a whole number of steps, at most kMaxFixedSteps) apply to fixed-step runs.
     {

@@ -514,3 +514,25 @@ TEST_CASE("Coulomb-damped oscillator: slip reversals and the final stick, with t
   const bool reduced = opt.contact_phases == ContactFormulation::Reduced;
   CHECK(sink.samples.back().q[0] == Approx(0.5 * model.x_e()).epsilon(reduced ? 1e-8 : 3e-7));
 }
+
+TEST_CASE("Event-driven options are checked at the library boundary, every broken rule listed",
+          "[events]") {
+  const SpringMass m;
+  EventDrivenOptions opt;
+  opt.rtol = 0.0;
+  opt.atol = -1.0;
+  opt.output_dt = std::numeric_limits<double>::infinity();
+  CHECK(event_driven_option_problems(opt).size() == 3);
+  MemorySink sink;
+  try {
+    run_event_driven(m, m.initial(), 1.0, opt, sink);
+    FAIL("no exception");
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    CHECK(what.find("rtol = 0: must be finite and > 0") != std::string::npos);
+    CHECK(what.find("atol = -1:") != std::string::npos);
+    CHECK(what.find("output_dt = inf:") != std::string::npos);
+  }
+  CHECK(sink.samples.empty());  // nothing reached the sink
+  CHECK(event_driven_option_problems(EventDrivenOptions{}).empty());
+}

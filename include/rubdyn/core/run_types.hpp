@@ -93,6 +93,13 @@ struct EventRecord {
   std::string note;     ///< free text (Painleve rule, Zeno truncation estimate, ...)
 };
 
+/// One broken rule of a solver's options: the option ("h", "rtol", "t_end", ...), its value as
+/// text, and the rule. Each solver family states its rules once in a *_option_problems function
+/// that its entry point and the case-file validation both call.
+struct OptionProblem {
+  std::string option, value, rule;
+};
+
 /// Counters and invariants of a run.
 struct RunSummary {
   std::string solver;   ///< solver kind, e.g. "event", "mj"

@@ -54,6 +54,7 @@
 //   - omega_lim's witness is removed once crossed (main loop).
 #include <atomic>
 #include <functional>
+#include <vector>
 
 #include "rubdyn/core/run_types.hpp"
 #include "rubdyn/model/lagrangian_model.hpp"
@@ -96,10 +97,17 @@ struct EventDrivenOptions {
   const std::atomic<bool>* stop = nullptr;
 };
 
+/// Every rule that `opt` breaks (empty: valid): rtol and atol finite and > 0; output_dt finite
+/// and > 0; omega_lim finite and >= 0; max_events_per_second > 0; max_steps_per_call >= 1. The one
+/// statement of these rules: run_event_driven and the case-file validation (io/case_toml.cpp)
+/// both call it.
+std::vector<OptionProblem> event_driven_option_problems(const EventDrivenOptions& opt);
+
 /// Integrates from `initial` to t_end; hands samples, events and the summary to `sink`.
 /// Never throws from inside the time loop: numerical trouble ends the run with a typed
-/// termination, a message, and everything produced so far. Throws std::invalid_argument for a
-/// model with contact_count() != 1. omega (monitor, omega_lim) is the rate of the model's
+/// termination, a message, and everything produced so far. Throws std::invalid_argument, before
+/// anything reaches the sink, listing every rule the options break (event_driven_option_problems)
+/// or for a model with contact_count() != 1. omega (monitor, omega_lim) is the rate of the model's
 /// spin_coordinate(); a model without one has no omega_lim witness.
 RunSummary run_event_driven(const LagrangianModel& model, const MechanicalState& initial,
                             double t_end, const EventDrivenOptions& opt, OutputSink& sink);

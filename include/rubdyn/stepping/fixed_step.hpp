@@ -48,12 +48,6 @@ struct FixedStepOptions {
 /// almost surely a typo in h (h = 1e-20 s asks for 1e17 steps) and is refused before the run.
 inline constexpr long kMaxFixedSteps = 1'000'000'000;
 
-/// One broken rule of the fixed-step options: the option ("h", "itmax", "t_end", ...), its
-/// value as text, and the rule.
-struct OptionProblem {
-  std::string option, value, rule;
-};
-
 /// Every rule that `opt` breaks on its own (empty: valid): h finite and > 0; itmax >= 1;
 /// qn_tol > 0; theta in [0.5, 1]; eta in [0, 1]; output_every >= 0; output_dt finite and > 0.
 /// The one statement of these rules: run_fixed_step and the case-file validation
