@@ -8,8 +8,10 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <atomic>
 #include <chrono>
 #include <exception>
+#include <future>
 #include <optional>
 #include <string>
 #include <utility>
@@ -121,21 +123,22 @@ py::dict event_columns(const std::vector<EventRecord>& events) {
   return d;
 }
 
-/// One run. The GIL is released while the solver runs; the progress callback (if any) takes it
-/// back, at most every `progress_interval` seconds of wall time (first sample always). An
-/// exception raised by the callback stops further calls and is re-raised after the run (the
-/// solver has no way to be interrupted from outside).
+/// One run. It goes on a worker thread while the calling thread waits with the GIL released;
+/// every 50 ms the calling thread takes the GIL to let Python handle its signals (only the main
+/// thread can): Ctrl-C sets the solver's stop flag, the run ends at its next output sample (a
+/// fixed-step run: its next step) and KeyboardInterrupt is raised. `progress` is called from the
+/// worker at output samples (event-driven solver), at most every progress_interval seconds of
+/// wall time; an exception it raises stops the run the same way and is re-raised.
 py::tuple run_case(const Case& c, const py::object& progress, double progress_interval) {
   MemorySink sink;
   RunSummary summary;
-  std::exception_ptr callback_error;
-  if (progress.is_none()) {
-    py::gil_scoped_release release;
-    summary = simulate(c.spec, sink);
-  } else {
+  std::exception_ptr callback_error, run_error;
+  std::atomic<bool> stop{false};
+  ProgressFn fn;
+  if (!progress.is_none()) {
     auto last = std::chrono::steady_clock::now();
     bool first = true;
-    ProgressFn fn = [&](double t, long events, double omega, Phase phase) {
+    fn = [&, last, first](double t, long events, double omega, Phase phase) mutable {
       if (callback_error) return;
       const auto now = std::chrono::steady_clock::now();
       if (!first && std::chrono::duration<double>(now - last).count() < progress_interval) return;
@@ -146,12 +149,35 @@ py::tuple run_case(const Case& c, const py::object& progress, double progress_in
         progress(t, events, omega, std::string(to_string(phase)));
       } catch (...) {
         callback_error = std::current_exception();
+        stop = true;
       }
     };
-    py::gil_scoped_release release;
-    summary = simulate(c.spec, sink, fn);
   }
+  bool interrupted = false;
+  {
+    py::gil_scoped_release release;
+    auto done = std::async(std::launch::async, [&] {
+      try {
+        summary = simulate(c.spec, sink, fn, &stop);
+      } catch (...) {
+        run_error = std::current_exception();
+      }
+    });
+    while (done.wait_for(std::chrono::milliseconds(50)) != std::future_status::ready) {
+      py::gil_scoped_acquire acquire;
+      if (PyErr_CheckSignals() != 0) {
+        PyErr_Clear();  // raised again below, once the run has ended
+        interrupted = true;
+        stop = true;
+      }
+    }
+  }
+  if (run_error) std::rethrow_exception(run_error);
   if (callback_error) std::rethrow_exception(callback_error);
+  if (interrupted) {
+    PyErr_SetNone(PyExc_KeyboardInterrupt);
+    throw py::error_already_set();
+  }
   return py::make_tuple(sample_columns(sink.samples), event_columns(sink.events),
                         summary_json(summary));
 }
