@@ -34,12 +34,13 @@ double fraction(const std::vector<DerivedSample>& d, double t0, double t1, Pred 
   return t1 > t0 ? acc / (t1 - t0) : 0.0;
 }
 
-// Marks the samples of sustained runs of `dir` whirl in contact (see the header).
+// Marks the samples of sustained runs of `dir` whirl: in contact, or in any regime when
+// `in_contact` is false (the precession-sign whirl; see the header).
 std::vector<char> sustained_runs(const std::vector<DerivedSample>& d, double t0, double t1,
-                                 Whirl dir, double min_turns) {
+                                 Whirl dir, double min_turns, bool in_contact = true) {
   std::vector<char> mark(d.size(), 0);
   auto in_run = [&](const DerivedSample& x) {
-    return x.regime != Regime::Free && x.whirl == dir && x.t >= t0 && x.t <= t1;
+    return (!in_contact || x.regime != Regime::Free) && x.whirl == dir && x.t >= t0 && x.t <= t1;
   };
   const double need = 2.0 * M_PI * min_turns;
   size_t i = 0;
@@ -247,11 +248,27 @@ RunVerdicts verdicts(const RunRecord& r, std::vector<DerivedSample>& d, const An
     if (!v.whip_onset && d[i].regime == Regime::Sliding) v.whip_onset = d[i].t;
     if (!v.whirl_onset && d[i].regime == Regime::Rolling) v.whirl_onset = d[i].t;
   }
+  const auto sign_bwd = sustained_runs(d, t0, t1, Whirl::Backward, o.min_turns, false);
+  const auto sign_fwd = sustained_runs(d, t0, t1, Whirl::Forward, o.min_turns, false);
+  for (size_t i = 0; i < d.size(); ++i) {
+    d[i].sign_run = sign_bwd[i] || sign_fwd[i];
+    if (sign_bwd[i] && !v.sign_backward_onset) v.sign_backward_onset = d[i].t;
+  }
+  // the last free sample of the window: contact is permanent from the next row on
+  std::optional<size_t> last_free;
+  for (size_t i = 0; i < d.size(); ++i)
+    if (d[i].t >= t0 && d[i].t <= t1 && d[i].regime == Regime::Free) last_free = i;
+  if (!last_free) {
+    v.permanent_contact_onset = t0;
+  } else if (*last_free + 1 < d.size() && d[*last_free + 1].t <= t1) {
+    v.permanent_contact_onset = d[*last_free + 1].t;
+  }
   // fraction() sees the sample, not its index: mark through a parallel copy
-  std::vector<DerivedSample> b = d, f = d;
+  std::vector<DerivedSample> b = d, f = d, sb = d;
   for (size_t i = 0; i < d.size(); ++i) {
     b[i].sustained = bwd[i];
     f[i].sustained = fwd[i];
+    sb[i].sustained = sign_bwd[i];
   }
   auto sus = [](const DerivedSample& x) { return x.sustained; };
   v.backward_fraction = fraction(b, t0, t1, sus);
@@ -260,6 +277,7 @@ RunVerdicts verdicts(const RunRecord& r, std::vector<DerivedSample>& d, const An
   v.whirl_fraction =
       fraction(b, t0, t1, [](auto& x) { return x.sustained && x.regime == Regime::Rolling; });
   v.forward_fraction = fraction(f, t0, t1, sus);
+  v.sign_backward_fraction = fraction(sb, t0, t1, sus);
   return v;
 }
 
@@ -326,6 +344,9 @@ std::string verdicts_json(const RunVerdicts& v) {
   field("backward_onset", opt_json(v.backward_onset));
   field("whip_onset", opt_json(v.whip_onset));
   field("whirl_onset", opt_json(v.whirl_onset));
+  field("sign_backward_fraction", num_json(v.sign_backward_fraction));
+  field("sign_backward_onset", opt_json(v.sign_backward_onset));
+  field("permanent_contact_onset", opt_json(v.permanent_contact_onset));
   field("max_friction_torque_ratio", num_json(v.max_friction_torque_ratio));
   field("mean_friction_torque_ratio", num_json(v.mean_friction_torque_ratio));
   field("min_dN_over_g0", num_json(v.min_dN_over_g0));
@@ -374,11 +395,11 @@ RunVerdicts write_analysis(const RunRecord& r, const AnalysisOptions& o,
   auto out = std::back_inserter(b);
   fmt::format_to(out,
                  "t,omega,precession,precession_ratio,whirl,regime,dN_over_g0,"
-                 "friction_torque_ratio,sustained\n");
+                 "friction_torque_ratio,sustained,sign_run\n");
   for (const auto& x : d) {
-    fmt::format_to(out, "{},{},{},{},{},{},{},{},{}\n", x.t, x.omega, x.precession,
+    fmt::format_to(out, "{},{},{},{},{},{},{},{},{},{}\n", x.t, x.omega, x.precession,
                    x.precession_ratio, to_string(x.whirl), to_string(x.regime), x.dN_over_g0,
-                   x.friction_torque_ratio, x.sustained ? 1 : 0);
+                   x.friction_torque_ratio, x.sustained ? 1 : 0, x.sign_run ? 1 : 0);
   }
   write_file_atomic((fs::path(dir) / "derived.csv").string(), fmt::to_string(b));
   b.clear();

@@ -228,8 +228,9 @@ std::string sweep_csv(const std::vector<std::string>& keys, const std::vector<Sw
     s += k;
   }
   s += ",termination,complete,omega_max,omega_final,t_omega_lim,limited,contact_fraction,"
-       "backward_fraction,backward_onset,whip_fraction,whip_onset,stick_fraction,"
-       "max_friction_torque_ratio,events,wall_seconds,folder";
+       "backward_fraction,backward_onset,whip_fraction,whip_onset,sign_backward_onset,"
+       "permanent_contact_onset,stick_fraction,max_friction_torque_ratio,events,wall_seconds,"
+       "folder";
   if (certify)
     s += ",certified,tight_termination,tight_limited,tight_backward,tight_whip,"
          "tight_omega_max";
@@ -241,10 +242,11 @@ std::string sweep_csv(const std::vector<std::string>& keys, const std::vector<Sw
       s += csv_field(x);
     }
     const auto& v = r.v;
-    s += fmt::format(",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}", r.termination,
+    s += fmt::format(",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}", r.termination,
                      r.complete ? "yes" : "no", v.omega_max, v.omega_final, opt_csv(v.t_omega_lim),
                      v.limited ? "yes" : "no", v.contact_fraction, v.backward_fraction,
                      opt_csv(v.backward_onset), v.whip_fraction, opt_csv(v.whip_onset),
+                     opt_csv(v.sign_backward_onset), opt_csv(v.permanent_contact_onset),
                      v.stick_fraction, v.max_friction_torque_ratio, v.events, r.wall_seconds,
                      csv_field(r.folder));
     if (certify) {

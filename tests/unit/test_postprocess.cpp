@@ -29,7 +29,7 @@ fs::path tmp(const std::string& name) {
 // angular speed w (w < 0: clockwise, backward for a positive spin), sampled every dt, in the
 // given phase, with F_T constant.
 fs::path circular_run(const std::string& name, double a, double w, double dt, int n,
-                      const char* phase, double F_T) {
+                      const char* phase, double F_T, double t_contact = 0.0) {
   const fs::path dir = tmp(name);
   fs::copy_file(kRef, dir / "case.resolved.toml");
   std::ofstream f(dir / "timeseries.csv");
@@ -41,7 +41,7 @@ fs::path circular_run(const std::string& name, double a, double w, double dt, in
     const double x = a * std::cos(w * t), y = a * std::sin(w * t);
     const double vx = -a * w * std::sin(w * t), vy = a * w * std::cos(w * t);
     f << t << ",0,0," << x << "," << y << ",0,0,0,0,0," << vx << "," << vy << ",2000,0,0,"
-      << 2e-4 - a << ",0,0,1," << F_T << "," << phase << "\n";
+      << 2e-4 - a << ",0,0,1," << F_T << "," << (t < t_contact ? "free" : phase) << "\n";
   }
   return dir;
 }
@@ -97,6 +97,66 @@ TEST_CASE("postprocess: a circular backward orbit - precession - whirl - spectru
   // the Campbell overlay at omega = 2000: backward modes at negative frequency
   CHECK(g.f1b[0] < 0.0);
   CHECK(g.f1f[0] > 0.0);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("postprocess: a backward orbit in flight is a precession-sign whirl, not a sustained one",
+          "[post]") {
+  // The orbit turns backward at 50 Hz from t = 0 (5 turns per 0.1 s); the rotor is in flight until
+  // t_c = 0.1 s and in contact after. The precession-sign whirl (any regime) starts at t = 0, the
+  // sustained whirl (in contact) and the permanent contact at the first contact sample, t_c.
+  // Sample times are k * 1e-4 written with 17 digits, and t_c = 1000 samples: the onsets are
+  // sample times, compared to 1e-12 relative (the decimal round trip of k * 1e-4).
+  const double dt = 1e-4, a = 1e-4, tc = 0.1;
+  const double w = -2.0 * M_PI * 50.0;
+  const auto dir = circular_run("flight-then-contact", a, w, dt, 2000, "slip-", 5.0, tc);
+  const RunRecord r = read_run(dir.string());
+  auto d = derive(r);
+  const RunVerdicts v = verdicts(r, d);
+  REQUIRE(v.sign_backward_onset.has_value());
+  CHECK(*v.sign_backward_onset == 0.0);
+  REQUIRE(v.backward_onset.has_value());
+  CHECK(*v.backward_onset == Approx(tc).epsilon(1e-12));
+  CHECK(v.whip_onset == v.backward_onset);
+  REQUIRE(v.permanent_contact_onset.has_value());
+  CHECK(*v.permanent_contact_onset == Approx(tc).epsilon(1e-12));
+  // time fractions: sample i holds over [t_i, t_i+1), so the run spans 1999 intervals; the sign
+  // whirl covers all of them, the sustained one the 999 from t_c (sums of dt: 1e-9 relative is
+  // far above their round-off and far below the 1 / 1999 that one interval more or less makes)
+  CHECK(v.sign_backward_fraction == Approx(1.0).epsilon(1e-12));
+  CHECK(v.backward_fraction == Approx(999.0 / 1999.0).epsilon(1e-9));
+  CHECK(d.front().sign_run);
+  CHECK_FALSE(d.front().sustained);
+  // min_turns = 6: the whole run (about 10 turns) is still a sign whirl, the contact stretch
+  // (999 dt at 50 Hz: 4.995 turns) is no longer a sustained one
+  AnalysisOptions o;
+  o.min_turns = 6.0;
+  auto d6 = derive(r);
+  const RunVerdicts v6 = verdicts(r, d6, o);
+  REQUIRE(v6.sign_backward_onset.has_value());
+  CHECK(*v6.sign_backward_onset == 0.0);
+  CHECK_FALSE(v6.backward_onset.has_value());
+  CHECK(v6.backward_fraction == 0.0);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("postprocess: a run ending in flight has no permanent contact", "[post]") {
+  // contact first, flight from t_c on: the rotor lifted off and did not come back
+  const fs::path dir = tmp("contact-then-flight");
+  fs::copy_file(kRef, dir / "case.resolved.toml");
+  std::ofstream f(dir / "timeseries.csv");
+  f << "t,x_b,y_b,x_r,y_r,theta,x_s,y_s,vx_b,vy_b,vx_r,vy_r,omega,vx_s,vy_s,d_N,v_N,v_t,F_N,F_T,"
+       "phase\n";
+  f.precision(17);
+  for (int k = 0; k < 1000; ++k)
+    f << k * 1e-4 << ",0,0,0,-1e-4,0,0,0,0,0,0,0,2000,0,0,1e-4,0,0,0,0,"
+      << (k < 500 ? "slip-" : "free") << "\n";
+  f.close();
+  const RunRecord r = read_run(dir.string());
+  auto d = derive(r);
+  const RunVerdicts v = verdicts(r, d);
+  CHECK_FALSE(v.permanent_contact_onset.has_value());
+  CHECK(v.contact_fraction == Approx(500.0 / 999.0).epsilon(1e-9));
   fs::remove_all(dir);
 }
 
@@ -169,12 +229,14 @@ std::vector<std::string> stable_rows(const fs::path& csv) {
   std::ifstream f(csv);
   std::string line;
   std::vector<std::string> out;
+  std::vector<char> drop;  // wall_seconds and folder differ between runs: found by header name
   while (std::getline(f, line)) {
     std::stringstream ss(line);
     std::string cell, keep;
-    int c = 0;
+    size_t c = 0;
     while (std::getline(ss, cell, ',')) {
-      if (c != 16 && c != 17) keep += cell + "|";  // wall_seconds, folder (one varied key)
+      if (out.empty()) drop.push_back(cell == "wall_seconds" || cell == "folder");
+      if (c >= drop.size() || !drop[c]) keep += cell + "|";
       ++c;
     }
     out.push_back(keep);

@@ -27,6 +27,16 @@
 // itself varies slowly), reaches 2 pi `min_turns`. Backward-whirl onset = start of the first
 // sustained backward run; whip onset = first sliding sample of a sustained backward run; the
 // whip and dry-whirl fractions split the sustained backward time by regime.
+// Precession-sign whirl (partial contact allowed): the same rule without the contact condition,
+// i.e. runs of consecutive samples with the same precession sign, in contact or in flight,
+// covering 2 pi `min_turns` of orbit angle. Its onset comes earlier than the sustained one when
+// the orbit turns backward while the rotor still bounces. Both are reported; the whip verdicts
+// (whip_onset, whip_fraction, sweep's whip column) use the sustained whirl, because that is the
+// one that matches the paper's description of whip onset (contact permanent first, then the
+// precession strictly negative, then the friction torque above the drive and the speed falling):
+// the evidence is validation/paper/whirl.py.
+// Permanent contact onset: the start of the last contact stretch of the window when it lasts to
+// the window's end (no lift-off after it); none when the window ends in free flight.
 //
 // Spectra of z = x_r + i y_r (the rotor orbit at R; negative frequencies = backward whirl): the
 // signal is resampled on a uniform grid (the most frequent sample spacing, linear interpolation
@@ -60,6 +70,7 @@ struct DerivedSample {
   Regime regime = Regime::Free;
   double dN_over_g0 = 0, friction_torque_ratio = 0;
   bool sustained = false;  ///< part of a sustained whirl run (set by verdicts())
+  bool sign_run = false;   ///< part of a precession-sign whirl run (set by verdicts())
 };
 
 struct AnalysisOptions {
@@ -86,7 +97,10 @@ struct RunVerdicts {
   double whip_fraction = 0;      ///< sustained backward whirl, sliding
   double whirl_fraction = 0;     ///< sustained backward whirl, rolling
   double forward_fraction = 0;   ///< sustained forward whirl (in contact)
-  std::optional<double> backward_onset, whip_onset, whirl_onset;         ///< see the header comment
+  std::optional<double> backward_onset, whip_onset, whirl_onset;  ///< see the header comment
+  double sign_backward_fraction = 0;              ///< precession-sign backward whirl (any regime)
+  std::optional<double> sign_backward_onset;      ///< start of its first run
+  std::optional<double> permanent_contact_onset;  ///< see the header comment
   double max_friction_torque_ratio = 0, mean_friction_torque_ratio = 0;  ///< over the window
   double min_dN_over_g0 = 0;                                             ///< < 0: penetration
   long events = 0;  ///< rows of events.csv (every kind), whole run
