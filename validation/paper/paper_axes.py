@@ -68,7 +68,7 @@ def figure_set(rubdyn, case, out, figdir, quick=False):
     for mu, rr in runs.items():
         tt = rr.t / tref
         ax[0].plot(tt, rr.omega / oml, lw=1, label="mu = %g" % mu)
-        if mu in (0, 0.1, 0.2):
+        if mu in (0, 0.1, 0.2, 0.25):
             ax[1].plot(tt, rr.prec, lw=0.5, label="mu = %g" % mu)
             ax[2].plot(tt, rr.ftr, lw=0.5, label="mu = %g" % mu)
             ax[3].plot(tt, dn(rr, g0), lw=0.5, label="mu = %g" % mu)
@@ -193,7 +193,8 @@ def dn(run, g0):
     return run.dN / g0
 
 
-def spectrogram_panel(run, cb, tref, fmax, title, path):
+def spectrogram_panel(run, cb, tref, fmax, title, path, marks=()):
+    """marks: vertical lines (t [s], colour, line style, label) drawn on top."""
     tc, oc, f, a = spectrogram(run)
     keep = np.abs(f) <= fmax
     fig, ax = plt.subplots(figsize=(9, 6))
@@ -204,6 +205,8 @@ def spectrogram_panel(run, cb, tref, fmax, title, path):
     for nm, style, sign in (("f1f", "w--", 1), ("f2f", "r--", 1), ("f1b", "w-", -1),
                             ("f2b", "r-", -1)):
         ax.plot(tc / tref, sign * cb(nm, oc), style, lw=0.8, label=nm)
+    for tm, c, ls, name in marks:
+        ax.axvline(tm / tref, color=c, ls=ls, lw=1.2, label=name)
     ax.set_xlabel("t / t_ref")
     ax.set_ylabel("f [Hz] (negative: backward)")
     ax.set_ylim(-fmax, fmax)
