@@ -74,6 +74,7 @@ def figure_set(rubdyn, case, out, figdir, quick=False):
             ax[3].plot(tt, dn(rr, g0), lw=0.5, label="mu = %g" % mu)
     ax[0].axhline(1, color="r", ls=":", lw=0.8)
     ax[1].set_yscale("symlog", linthresh=10)
+    ax[2].set_yscale("symlog", linthresh=1)  # the stick onset at mu = 0.25 reaches 4e4 tau_a
     for a, y in zip(ax, ["Omega / Omega_lim", "v_prec [rad/s] (raw)", "R_r F_T / tau_a",
                          "d_N / g0"]):
         a.set_ylabel(y)
