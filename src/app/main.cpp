@@ -14,7 +14,8 @@ int main(int argc, char** argv) {
   app.footer(
       "Exit codes: 0 complete result; 2 bad input or usage, output folder in use or not "
       "preparable (nothing written); 3 run ended early for a numerical reason; 4 interrupted by "
-      "SIGINT/SIGTERM; 5 a write failed (the message names the file). In 3, 4 and 5 the output so "
+      "SIGINT/SIGTERM or by the wall-time budget run.max_wall; 5 a write failed (the message names "
+      "the file). In 3, 4 and 5 the output so "
       "far is kept and summary.json says \"complete\": false with the reason (README.md).");
   rubdyn::app::Action action;
   rubdyn::app::add_check_command(app, action);

@@ -38,6 +38,7 @@ std::string_view to_string(Termination t) {
     case Termination::Zeno: return "zeno";
     case Termination::Chattering: return "chattering";
     case Termination::Interrupted: return "interrupted";
+    case Termination::TimeBudget: return "time_budget";
     case Termination::OutputFailure: return "output_failure";
   }
   return "?";

@@ -487,6 +487,16 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
           fail(Termination::Interrupted, fmt::format("interrupted at t = {:.17g}", t));
           break;
         }
+        if (opt_.max_wall > 0.0 && t < t_end_) {
+          const double spent =
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+          if (spent > opt_.max_wall) {
+            fail(Termination::TimeBudget,
+                 fmt::format("wall-time budget of {} s spent ({:.3g} s) at t = {:.17g}",
+                             opt_.max_wall, spent, t));
+            break;
+          }
+        }
         if (t >= tout && tout == next_out_)
           next_out_ = t_init_ + static_cast<double>(++k_out_) * opt_.output_dt;
         continue;
@@ -568,6 +578,8 @@ std::vector<OptionProblem> event_driven_option_problems(const EventDrivenOptions
     bad.push_back({"max_events_per_second", num(o.max_events_per_second), "must be > 0"});
   if (o.max_steps_per_call < 1)
     bad.push_back({"max_steps_per_call", fmt::format("{}", o.max_steps_per_call), "must be >= 1"});
+  if (!(std::isfinite(o.max_wall) && o.max_wall >= 0.0))
+    bad.push_back({"max_wall", num(o.max_wall), "must be finite and >= 0 (seconds; 0: none)"});
   return bad;
 }
 

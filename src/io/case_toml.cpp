@@ -80,6 +80,7 @@ const std::vector<KeySpec>& schema() {
     num("run", "t_start", false, [](CaseSpec& c) { return &c.run.t_start; });
     num("run", "t_end", true, [](CaseSpec& c) { return &c.run.t_end; });
     num("run", "omega_lim", true, [](CaseSpec& c) { return &c.run.omega_lim; });
+    num("run", "max_wall", false, [](CaseSpec& c) { return &c.run.max_wall; });
     text("solver", "kind", [](CaseSpec& c) { return &c.solver.kind; });
     num("solver", "rtol", false, [](CaseSpec& c) { return &c.solver.rtol; });
     num("solver", "atol", false, [](CaseSpec& c) { return &c.solver.atol; });
@@ -419,15 +420,18 @@ class Loader {
       fo.eta = so.eta;
       fo.output_every = c.output.every;
       fo.output_dt = c.output.dt;
+      fo.max_wall = c.run.max_wall;  // (the event-driven check states the same rule: not mapped)
       auto bad = fixed_step_option_problems(fo);
       if (fixed_step) {
         for (auto& p : fixed_step_count_problems(fo.h, c.run.t_start, c.run.t_end))
           bad.push_back(p);
       }
       static const std::map<std::string, std::string> key_of = {
-          {"h", "solver.h"},          {"itmax", "solver.itmax"},       {"qn_tol", "solver.qn_tol"},
-          {"theta", "solver.theta"},  {"eta", "solver.eta"},           {"t_end", "run.t_end"},
-          {"output_dt", "output.dt"}, {"output_every", "output.every"}};
+          {"h", "solver.h"},           {"itmax", "solver.itmax"},
+          {"qn_tol", "solver.qn_tol"}, {"theta", "solver.theta"},
+          {"eta", "solver.eta"},       {"t_end", "run.t_end"},
+          {"output_dt", "output.dt"},  {"output_every", "output.every"},
+          {"max_wall", "run.max_wall"}};
       for (const auto& p : bad) {
         const std::string& key = key_of.at(p.option);
         if (key == "run.t_end" && !(c.run.t_end > c.run.t_start)) continue;  // reported above

@@ -25,6 +25,7 @@ RunSummary run_event(const CaseSpec& spec, const LagrangianModel& model, const M
   opt.max_events_per_second = spec.solver.max_events_per_second;
   opt.progress = progress;
   opt.stop = stop;
+  opt.max_wall = spec.run.max_wall;
   return run_event_driven(model, s0, spec.run.t_end, opt, sink);
 }
 
@@ -48,6 +49,7 @@ RunSummary run_fixed(const CaseSpec& spec, const LagrangianModel& model, const M
   opt.output_dt = spec.output.dt;
   opt.omega_lim = spec.run.omega_lim;
   opt.stop = stop;
+  opt.max_wall = spec.run.max_wall;
   return run_fixed_step(model, s0, spec.run.t_end, opt, sink);
 }
 

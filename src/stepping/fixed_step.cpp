@@ -174,6 +174,17 @@ RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_
       sum_.message = fmt::format("interrupted at t = {:.17g}", t);
       break;
     }
+    // the clock every 1024 steps: about 20 ns a read against about 0.3 us a step
+    if (o_.max_wall > 0.0 && i % 1024 == 1023) {
+      const double spent =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+      if (spent > o_.max_wall) {
+        sum_.termination = Termination::TimeBudget;
+        sum_.message = fmt::format("wall-time budget of {} s spent ({:.3g} s) at t = {:.17g}",
+                                   o_.max_wall, spent, t);
+        break;
+      }
+    }
     const StepOutcome outcome = stepper.step(t, r, message);
     if (outcome != StepOutcome::Ok) {
       sum_.termination = outcome == StepOutcome::Painleve    ? Termination::Painleve
@@ -240,6 +251,8 @@ std::vector<OptionProblem> fixed_step_option_problems(const FixedStepOptions& o)
         {"output_every", fmt::format("{}", o.output_every), "must be >= 0 (0: use output_dt)"});
   if (!(std::isfinite(o.output_dt) && o.output_dt > 0.0))
     bad.push_back({"output_dt", num(o.output_dt), "must be finite and > 0"});
+  if (!(std::isfinite(o.max_wall) && o.max_wall >= 0.0))
+    bad.push_back({"max_wall", num(o.max_wall), "must be finite and >= 0 (seconds; 0: none)"});
   return bad;
 }
 

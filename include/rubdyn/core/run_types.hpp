@@ -46,6 +46,7 @@ enum class Termination : int {
   Zeno,        ///< an accumulation of impacts that could not be resolved
   Chattering,  ///< too many events per unit of simulated time
   Interrupted,    ///< stopped by the user (SIGINT, SIGTERM) at an output sample
+  TimeBudget,     ///< stopped at an output sample once the run's wall-time budget was spent
   OutputFailure,  ///< the output could not be written (disk full, I/O error); ends the run
 };
 std::string_view to_string(Termination t);
@@ -54,15 +55,16 @@ std::string_view to_string(Termination t);
 inline constexpr int kExitOk = 0;           ///< complete result
 inline constexpr int kExitBadInput = 2;     ///< bad input, usage, folder locked: nothing written
 inline constexpr int kExitEarlyEnd = 3;     ///< numerical early end: output kept, incomplete
-inline constexpr int kExitInterrupted = 4;  ///< SIGINT / SIGTERM: output kept, incomplete
+inline constexpr int kExitInterrupted = 4;  ///< SIGINT / SIGTERM / run.max_wall: output kept
 inline constexpr int kExitOutput = 5;       ///< a write failed: the error names the file
 
-/// Exit code of the CLI for a termination: 0 for Completed, 4 for Interrupted, 5 for
-/// OutputFailure, 3 for the numerical ones.
+/// Exit code of the CLI for a termination: 0 for Completed, 4 for Interrupted and TimeBudget
+/// (stopped on the user's request), 5 for OutputFailure, 3 for the numerical ones.
 inline int exit_code(Termination t) {
   switch (t) {
     case Termination::Completed: return kExitOk;
-    case Termination::Interrupted: return kExitInterrupted;
+    case Termination::Interrupted:
+    case Termination::TimeBudget: return kExitInterrupted;
     case Termination::OutputFailure: return kExitOutput;
     default: return kExitEarlyEnd;
   }

@@ -95,10 +95,14 @@ struct EventDrivenOptions {
   /// When set and true (a signal handler sets it), the run ends right after its next output
   /// sample with Termination::Interrupted, keeping what it wrote.
   const std::atomic<bool>* stop = nullptr;
+  /// Wall-time budget [s], 0 = none: once spent, the run ends right after its next output
+  /// sample with Termination::TimeBudget, keeping what it wrote.
+  double max_wall = 0.0;
 };
 
 /// Every rule that `opt` breaks (empty: valid): rtol and atol finite and > 0; output_dt finite
-/// and > 0; omega_lim finite and >= 0; max_events_per_second > 0; max_steps_per_call >= 1. The one
+/// and > 0; omega_lim finite and >= 0; max_events_per_second > 0; max_steps_per_call >= 1;
+/// max_wall finite and >= 0. The one
 /// statement of these rules: run_event_driven and the case-file validation (io/case_toml.cpp)
 /// both call it.
 std::vector<OptionProblem> event_driven_option_problems(const EventDrivenOptions& opt);

@@ -22,6 +22,9 @@ struct RunOptions {
   double t_start = 0.0;
   double t_end = 0.5;         ///< [s]
   double omega_lim = 2110.0;  ///< speed limit used by the analysis [rad/s]
+  /// [s] wall-time budget of the run, 0 = none: a run that has spent it stops at its next
+  /// output sample with Termination::TimeBudget, keeping what it wrote
+  double max_wall = 0.0;
 };
 
 /// [solver]

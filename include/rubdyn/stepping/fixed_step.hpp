@@ -41,6 +41,9 @@ struct FixedStepOptions {
   /// When set and true (a signal handler sets it), the run ends before its next step with
   /// Termination::Interrupted, keeping what it wrote.
   const std::atomic<bool>* stop = nullptr;
+  /// Wall-time budget [s], 0 = none: once spent, the run ends before its next step (the clock
+  /// is read every 1024 steps) with Termination::TimeBudget, keeping what it wrote.
+  double max_wall = 0.0;
 };
 
 /// Largest number of steps of one fixed-step run (README, "Exit codes and the output contract").
