@@ -19,6 +19,7 @@
 
 #include "rubdyn/analysis/campbell.hpp"
 #include "rubdyn/analysis/compare.hpp"
+#include "rubdyn/analysis/postprocess.hpp"
 #include "rubdyn/core/run_types.hpp"
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
@@ -225,6 +226,74 @@ py::dict campbell_dict(const CampbellDiagram& d) {
   return r;
 }
 
+/// `rubdyn analyze` on samples held in memory (columns named as in timeseries.csv, phase as
+/// codes): the verdicts as analysis.json writes them, and derived.csv's columns.
+py::tuple analyze_columns(const Case& c, const py::dict& columns, long events, double min_turns,
+                          std::optional<double> t0, std::optional<double> t1) {
+  AnalysisOptions o;
+  o.min_turns = min_turns;
+  o.t0 = t0;
+  o.t1 = t1;
+  const auto bad = analysis_option_problems(o);
+  if (!bad.empty()) throw py::value_error(bad.front());
+  auto col = [&](const char* name) {
+    if (!columns.contains(name)) throw py::value_error(std::string("no column ") + name);
+    return columns[name].cast<py::array_t<double, py::array::forcecast>>();
+  };
+  const auto t = col("t");
+  const std::size_t n = static_cast<std::size_t>(t.size());
+  RunRecord r;
+  r.dir = c.spec.source;
+  r.spec = c.spec;
+  r.events = events;
+  r.samples.resize(n);
+  auto fill = [&](const char* name, auto set) {
+    const auto a = col(name);
+    if (static_cast<std::size_t>(a.size()) != n)
+      throw py::value_error(std::string("column ") + name + " is not as long as t");
+    for (std::size_t i = 0; i < n; ++i) set(r.samples[i], a.at(static_cast<py::ssize_t>(i)));
+  };
+  fill("t", [](Sample& s, double x) { s.t = x; });
+  for (int j = 0; j < kNumDofs; ++j) {
+    fill(kDofNames[j], [j](Sample& s, double x) { s.q[j] = x; });
+    fill(kVelNames[j], [j](Sample& s, double x) { s.v[j] = x; });
+  }
+  fill("d_N", [](Sample& s, double x) { s.d_N = x; });
+  fill("v_N", [](Sample& s, double x) { s.v_N = x; });
+  fill("v_t", [](Sample& s, double x) { s.v_t = x; });
+  fill("F_N", [](Sample& s, double x) { s.F_N = x; });
+  fill("F_T", [](Sample& s, double x) { s.F_T = x; });
+  fill("phase", [](Sample& s, double x) {
+    if (!(x >= 0 && x <= static_cast<double>(Phase::Stick) && x == static_cast<int>(x)))
+      throw py::value_error("phase codes must be 0 (free) to 3 (stick)");
+    s.phase = static_cast<Phase>(static_cast<int>(x));
+  });
+  std::vector<DerivedSample> d = derive(r);
+  const RunVerdicts v = verdicts(r, d, o);
+  py::dict out;
+  auto number = [&](const char* name, auto get) {
+    std::vector<double> a(d.size());
+    for (std::size_t i = 0; i < d.size(); ++i) a[i] = get(d[i]);
+    out[name] = to_array(std::move(a));
+  };
+  auto words = [&](const char* name, auto get) {
+    py::list l;
+    for (const auto& x : d) l.append(py::str(std::string(get(x))));
+    out[name] = l;
+  };
+  number("t", [](const DerivedSample& x) { return x.t; });
+  number("omega", [](const DerivedSample& x) { return x.omega; });
+  number("precession", [](const DerivedSample& x) { return x.precession; });
+  number("precession_ratio", [](const DerivedSample& x) { return x.precession_ratio; });
+  words("whirl", [](const DerivedSample& x) { return to_string(x.whirl); });
+  words("regime", [](const DerivedSample& x) { return to_string(x.regime); });
+  number("dN_over_g0", [](const DerivedSample& x) { return x.dN_over_g0; });
+  number("friction_torque_ratio", [](const DerivedSample& x) { return x.friction_torque_ratio; });
+  number("sustained", [](const DerivedSample& x) { return x.sustained ? 1.0 : 0.0; });
+  number("sign_run", [](const DerivedSample& x) { return x.sign_run ? 1.0 : 0.0; });
+  return py::make_tuple(verdicts_json(v), out);
+}
+
 py::dict kinematics_dict(const ContactKinematics& k) {
   py::dict d;
   d["d_N"] = k.d_N;
@@ -315,6 +384,8 @@ PYBIND11_MODULE(_core, m) {
   m.def("parse_case", &make_case_from_text, py::arg("text"), py::arg("source") = "<string>",
         py::arg("overrides") = std::vector<std::string>{});
   m.def("with_overrides", &with_overrides, py::arg("case"), py::arg("overrides"));
+  m.def("analyze", &analyze_columns, py::arg("case"), py::arg("columns"), py::arg("events"),
+        py::arg("min_turns"), py::arg("t0") = py::none(), py::arg("t1") = py::none());
   m.def("run", &run_case, py::arg("case"), py::arg("progress") = py::none(),
         py::arg("progress_interval") = 0.1,
         "(columns, events, summary_json) of one run; the GIL is released while it runs");

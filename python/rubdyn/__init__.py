@@ -15,8 +15,9 @@ from . import _core
 from ._core import Case, Model, CaseError
 from .result import Result, read, PHASES, EVENT_FIELDS
 
-__all__ = ["load_case", "parse_case", "run", "read", "campbell", "compare", "solvers", "Case", "Model",
-           "CaseError", "Result", "Comparison", "PHASES", "EVENT_FIELDS"]
+__all__ = ["load_case", "parse_case", "run", "read", "analyze", "campbell", "compare", "solvers",
+           "Case", "Model", "CaseError", "Result", "Comparison", "Analysis", "PHASES",
+           "EVENT_FIELDS"]
 
 
 def _override_list(overrides):
@@ -143,6 +144,46 @@ def _as_series(x, name):
         names.append(str(key))
         values.append(v.astype(float))
     return name, t, names, values, events
+
+
+class Analysis:
+    """What `rubdyn analyze` finds in a run. .verdicts: analysis.json's keys (limited,
+    t_omega_lim, backward_onset, whip_onset, sign_backward_onset, permanent_contact_onset, the
+    fractions, ...); .derived: derived.csv's columns (precession, whirl and regime as words,
+    sustained and sign_run as 0/1, ...). Definitions: include/rubdyn/analysis/postprocess.hpp."""
+
+    def __init__(self, verdicts, derived):
+        self.verdicts = verdicts
+        self.derived = derived
+
+    def __getitem__(self, key):
+        return self.verdicts[key]
+
+    def __repr__(self):
+        v = self.verdicts
+        return (f"<rubdyn.Analysis limited={v['limited']} backward_onset={v['backward_onset']} "
+                f"whip_onset={v['whip_onset']}>")
+
+
+def analyze(result, min_turns=1.0, t_window=None):
+    """`rubdyn analyze` on a Result (of rubdyn.run, or rubdyn.read of an output folder, which
+    needs its case.resolved.toml) or on an output folder's path: the same verdicts and derived
+    quantities as the CLI's analysis.json and derived.csv (one C++ definition), computed in
+    memory, nothing written. min_turns: orbit revolutions for a sustained whirl; t_window:
+    (t0, t1) to analyse a part of the run. Returns an Analysis."""
+    import json
+    import numpy as np
+    if isinstance(result, (str, os.PathLike)):
+        result = read(result)
+    if result.case is None:
+        raise ValueError("analyze needs the run's case (rubdyn.read found no case.resolved.toml)")
+    t0, t1 = (None, None) if t_window is None else (float(t_window[0]), float(t_window[1]))
+    columns = {k: np.asarray(v, dtype=float) for k, v in result.columns.items()}
+    text, derived = _core.analyze(result.case, columns, len(result.events), float(min_turns),
+                                  t0, t1)
+    for key in ("sustained", "sign_run"):
+        derived[key] = derived[key].astype(bool)
+    return Analysis(json.loads(text), derived)
 
 
 def compare(a, b, window=None, event_tol=1e-3, name_a=None, name_b=None):
