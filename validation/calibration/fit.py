@@ -19,7 +19,7 @@ publish, and what this script fits (see README.md for the reading of each target
     threshold with T1-T3 kept (none does: it stays evidence); the frictionless separation from the
     model's statics.
 Usage: validation/calibration/fit.py [path/to/rubdyn] [--quick]
-About 6 min on 2 cores (--quick: 1 min); runs go to out/calibration/.
+About 7 min on 2 cores (--quick: 1 min); runs go to out/calibration/.
 """
 import copy
 import os
