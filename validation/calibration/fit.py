@@ -23,6 +23,7 @@ About 7 min on 2 cores (--quick: 1 min); runs go to out/calibration/.
 """
 import copy
 import os
+import shutil
 import sys
 import tomllib
 
@@ -39,8 +40,12 @@ import stage2b  # noqa: E402
 
 RUBDYN, QUICK, OUT = script_args("calibration")
 REFERENCE = os.path.join(ROOT, "cases", "reference.toml")
-PAPER = os.path.join(ROOT, "cases", "paper.toml")
-RESULTS = os.path.join(HERE, "results.md")
+# the case is written and used in OUT while the fit runs, and copied to cases/paper.toml (and the
+# table to results.md) only when a full (not --quick) fit has finished: an interrupted or quick
+# fit leaves the repository's files as they were
+PAPER_FINAL = os.path.join(ROOT, "cases", "paper.toml")
+PAPER = os.path.join(OUT, "paper.toml")
+RESULTS = os.path.join(HERE, "results.md") if not QUICK else os.path.join(OUT, "results.md")
 
 # ---- stage 1 targets
 F2F_START = 190.0       # Hz, f2f at Omega_0 (Fig. 9a: "highest peak ... at 190 Hz", on f2f)
@@ -328,7 +333,7 @@ def stage3(case, lines, t_end, sep, kept, tref):
         raise SystemExit("stage 2b: T1-T3 and T7 met at %s: adopt it (not implemented)" %
                          sorted(s2b["ok"]))
     lines += lines2b + ["", "  No point of stage 2b meets T7 with T1-T3: cases/paper.toml keeps "
-                        "the stage-1 and stage-2 parameters."]
+                        "the stage-1 and stage-2 parameters.", ""]
     # the early spectrum: what dominates it at mu = 0 and 0.1
     r = spec["rotor"]
     ell = r["L"] - r["delta"]
@@ -405,7 +410,10 @@ def main():
     lines.append("")
     with open(RESULTS, "w") as fh:
         fh.write("\n".join(lines))
+    if not QUICK:
+        shutil.copyfile(PAPER, PAPER_FINAL)
     print("\n".join(lines))
+    print("case: %s; results: %s" % (PAPER_FINAL if not QUICK else PAPER, RESULTS))
 
 
 if __name__ == "__main__":
