@@ -511,7 +511,7 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
     write_file_atomic((fs::path(o.out) / "sweep.csv").string(), table);
   } else {
     const std::string stem = fmt::format("sweep-shard-{}-of-{}", o.shard.index, o.shard.count);
-    // the ensemble's settings
+    // the ensemble's settings, which sweep-merge requires to be the same in every shard
     const std::string ensemble =
         members > 0 ? fmt::format("{{\"members\": {}, \"domega\": {}, \"offset\": {}}}", members,
                                   o.ensemble.domega, o.ensemble.offset)
@@ -546,7 +546,7 @@ long merge_sweep_shards(const std::string& out) {
     shards[i] = e.path();
   }
   if (count < 0) throw std::runtime_error(out + ": no sweep-shard-i-of-N.csv files");
-  std::string header, body;
+  std::string header, body, ensemble;
   std::map<long, std::string> lines;
   long total = -1;
   for (int i = 1; i <= count; ++i) {
@@ -568,6 +568,15 @@ long merge_sweep_shards(const std::string& out) {
       throw std::runtime_error(
           fmt::format("{}: points_total {} differs from {} of shard 1", side.string(), t, total));
     total = t;
+    // the same ensemble settings (none in a shard written before ensembles existed): the P
+    // columns of two different ensembles would look alike in one table
+    static const std::regex ens(R"("ensemble":\s*(\{[^}]*\}))");
+    const std::string e =
+        std::regex_search(text, m, ens) ? std::string(m[1]) : std::string("{\"members\": 0}");
+    if (i == 1) ensemble = e;
+    if (e != ensemble)
+      throw std::runtime_error(
+          fmt::format("{}: ensemble {} differs from {} of shard 1", side.string(), e, ensemble));
     const CsvTable table = read_csv(shards[i].string());
     if (header.empty()) header = table.header_text;
     if (table.header_text != header)

@@ -351,6 +351,12 @@ TEST_CASE(
   // the tight run is the nominal point's only: "certified" is about the numerics
   CHECK(fs::exists(two / "p0001-tight"));
   CHECK_FALSE(fs::exists(two / "p0001-e01-tight"));
+  // a shard of another ensemble (same columns, other perturbations) is not merged
+  REQUIRE(cli(base + sh(two.string()) + " --shard 2/2 --ensemble-domega 0.2").code == 0);
+  const Outcome merged = cli("sweep-merge " + sh(two.string()));
+  CHECK(merged.code == 2);
+  CHECK(has(merged.err, "sweep-shard-2-of-2.json: ensemble"));
+  CHECK(has(merged.err, "\"domega\": 0.2"));
   fs::remove_all(one);
   fs::remove_all(two);
 }

@@ -178,7 +178,8 @@ std::string sweep_csv(const std::vector<std::string>& keys, const std::vector<Sw
                       bool certify, bool ensemble = false);
 
 /// Joins OUT/sweep-shard-*-of-N.csv into OUT/sweep.csv. Throws std::runtime_error naming the
-/// missing shard, the mismatching header or the missing points. Returns the number of rows.
+/// missing shard, the mismatching header or ensemble settings (the .json sidecars) or the
+/// missing points. Returns the number of rows.
 long merge_sweep_shards(const std::string& out);
 
 }  // namespace rubdyn
