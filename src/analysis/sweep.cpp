@@ -2,21 +2,27 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <mutex>
+#include <numbers>
 #include <regex>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
+#include <utility>
 
 #include "rubdyn/core/demand.hpp"
+#include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/output_folder.hpp"
 #include "rubdyn/io/output_reader.hpp"
@@ -135,7 +141,68 @@ std::string csv_field(const std::string& s) {
   return q + "\"";
 }
 
+/// The ensemble columns of a row from its nominal run and its members (see sweep.hpp).
+void ensemble_stats(SweepRow& row) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<std::pair<bool, const RunVerdicts*>> runs{{row.complete, &row.v}};
+  for (const auto& m : row.members) runs.emplace_back(m.complete, &m.v);
+  row.ensemble_members = static_cast<int>(runs.size());
+  row.ensemble_incomplete = 0;
+  int complete = 0, limited = 0, backward = 0, whip = 0, rolling = 0;
+  row.omega_max_min = row.omega_max_max = nan;
+  for (const auto& [ok, verdicts] : runs) {
+    if (!ok) {
+      ++row.ensemble_incomplete;
+      continue;
+    }
+    const RunVerdicts& v = *verdicts;
+    if (complete++ == 0) row.omega_max_min = row.omega_max_max = v.omega_max;
+    row.omega_max_min = std::min(row.omega_max_min, v.omega_max);
+    row.omega_max_max = std::max(row.omega_max_max, v.omega_max);
+    limited += v.limited ? 1 : 0;
+    backward += v.backward_onset ? 1 : 0;
+    whip += v.whip_fraction > 0 ? 1 : 0;
+    rolling += v.stick_fraction > 0 ? 1 : 0;
+  }
+  auto fraction = [&](int n) { return complete > 0 ? static_cast<double>(n) / complete : nan; };
+  row.p_limited = fraction(limited);
+  row.p_backward = fraction(backward);
+  row.p_whip = fraction(whip);
+  row.p_rolling = fraction(rolling);
+}
+
+/// A number of the table; NaN (not computed) as an empty field.
+std::string num_csv(double x) {
+  return std::isnan(x) ? "" : fmt::format("{}", x);
+}
+
 }  // namespace
+
+std::vector<std::string> ensemble_option_problems(const EnsembleOptions& e) {
+  std::vector<std::string> bad;
+  if (e.members < 0 || e.members > kMaxEnsembleMembers)
+    bad.push_back(fmt::format("--ensemble {}: must be in [0, {}] (0: no ensemble)", e.members,
+                              kMaxEnsembleMembers));
+  if (!std::isfinite(e.domega) || e.domega < 0)
+    bad.push_back(fmt::format("--ensemble-domega {}: must be finite and >= 0 [rad/s]", e.domega));
+  if (!std::isfinite(e.offset) || e.offset < 0)
+    bad.push_back(
+        fmt::format("--ensemble-offset {}: must be finite, >= 0 and < stator.gap [m]", e.offset));
+  return bad;
+}
+
+CaseSpec ensemble_member(const CaseSpec& point, int k, const EnsembleOptions& e) {
+  RUBDYN_DEMAND(k >= 1 && k <= e.members);
+  const int n = e.members;
+  // the operations in the documented order (sweep.hpp), so that the doubles can be recomputed
+  const double dw = n > 1 ? e.domega * (2.0 * (k - 1) / (n - 1) - 1.0) : e.domega;
+  const double a = 2.0 * std::numbers::pi * (k - 1) / n;
+  CaseSpec m = point;
+  m.initial.v0[TH] = point.initial.v0[TH] + dw;
+  m.initial.q0[XR] = point.initial.q0[XR] + e.offset * std::cos(a);
+  m.initial.q0[YR] = point.initial.q0[YR] + e.offset * std::sin(a);
+  return m;
+}
 
 Variation parse_variation(const std::string& text) {
   const auto eq = text.find('=');
@@ -221,7 +288,7 @@ std::vector<SweepPoint> sweep_points(const std::vector<Variation>& vary) {
 }
 
 std::string sweep_csv(const std::vector<std::string>& keys, const std::vector<SweepRow>& rows,
-                      bool certify) {
+                      bool certify, bool ensemble) {
   std::string s = "point";
   for (const auto& k : keys) {
     s += ',';
@@ -234,6 +301,9 @@ std::string sweep_csv(const std::vector<std::string>& keys, const std::vector<Sw
   if (certify)
     s += ",certified,tight_termination,tight_limited,tight_backward,tight_whip,"
          "tight_omega_max";
+  if (ensemble)
+    s += ",ensemble_members,ensemble_incomplete,p_limited,p_backward,p_whip,p_rolling,"
+         "omega_max_min,omega_max_max";
   s += "\n";
   for (const auto& r : rows) {
     s += fmt::format("{}", r.point.index);
@@ -255,6 +325,11 @@ std::string sweep_csv(const std::vector<std::string>& keys, const std::vector<Sw
                        t.limited ? "yes" : "no", t.backward_onset ? "yes" : "no",
                        t.whip_onset ? "yes" : "no", t.omega_max);
     }
+    if (ensemble) {
+      s += fmt::format(",{},{},{},{},{},{},{},{}", r.ensemble_members, r.ensemble_incomplete,
+                       num_csv(r.p_limited), num_csv(r.p_backward), num_csv(r.p_whip),
+                       num_csv(r.p_rolling), num_csv(r.omega_max_min), num_csv(r.omega_max_max));
+    }
     s += "\n";
   }
   return s;
@@ -264,6 +339,7 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
   namespace fs = std::filesystem;
   // every option first: nothing runs (or is allocated for 1e10 points) before all are checked
   std::vector<std::string> bad = analysis_option_problems(o.analysis);
+  for (const auto& b : ensemble_option_problems(o.ensemble)) bad.push_back(b);
   std::set<std::string> seen;
   for (const auto& v : o.vary)
     if (!seen.insert(v.key).second)
@@ -271,11 +347,15 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
           fmt::format("--vary {}: the key is varied twice (give one list of values)", v.key));
   if (o.jobs < 1) bad.push_back(fmt::format("jobs = {}: must be >= 1", o.jobs));
   const double count = sweep_point_count(o.vary);
-  if (count > static_cast<double>(o.max_points))
-    bad.push_back(
-        fmt::format("{:.6g} points, above the limit of {} (give --max-points N to run "
-                    "them)",
-                    count, o.max_points));
+  const int members = std::clamp(o.ensemble.members, 0, kMaxEnsembleMembers);  // checked above
+  if (count * (members + 1) > static_cast<double>(o.max_points)) {
+    const std::string what =
+        members > 0 ? fmt::format("{:.6g} runs ({:.6g} points x {} with --ensemble {})",
+                                  count * (members + 1), count, members + 1, members)
+                    : fmt::format("{:.6g} points", count);
+    bad.push_back(fmt::format("{}, above the limit of {} (give --max-points N to run them)", what,
+                              o.max_points));
+  }
   if (!bad.empty()) {
     std::string text = "invalid sweep:";
     for (const auto& b : bad) text += "\n  " + b;
@@ -291,6 +371,18 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
     for (const auto& x : p.overrides()) sets.push_back(x);
     specs.push_back(load_case(o.case_path, sets));
   }
+  if (members > 0) {  // the offset must leave every point's rotor inside its clearance
+    long over = 0;
+    size_t first = 0;
+    for (size_t i = 0; i < specs.size(); ++i)
+      if (!(o.ensemble.offset < specs[i].params.stator.gap) && over++ == 0) first = i;
+    if (over > 0)
+      throw std::invalid_argument(fmt::format(
+          "invalid sweep:\n  --ensemble-offset {}: must be < stator.gap = {} m (the rotor is "
+          "released that far off its position, inside the clearance); broken at {} point{} "
+          "(first: point {})",
+          o.ensemble.offset, specs[first].params.stator.gap, over, over == 1 ? "" : "s", first));
+  }
   std::vector<size_t> mine;
   for (size_t i = 0; i < all.size(); ++i)
     if (static_cast<int>(i % static_cast<size_t>(o.shard.count)) == o.shard.index - 1)
@@ -302,6 +394,23 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
       for (const auto& x : all[i].overrides()) sets.push_back(x);
       for (const auto& x : tight_overrides(specs[i])) sets.push_back(x);
       tight.push_back(load_case(o.case_path, sets));
+    }
+  }
+  // the members of this shard's points, each validated as a case (read back from its TOML)
+  std::vector<std::vector<CaseSpec>> member_specs(mine.size());
+  for (size_t k = 0; k < mine.size(); ++k) {
+    for (int m = 1; m <= members; ++m) {
+      member_specs[k].push_back(ensemble_member(specs[mine[k]], m, o.ensemble));
+      try {
+        parse_case(to_toml(member_specs[k].back()), o.case_path);
+      } catch (const CaseError& e) {
+        auto issues = e.issues();
+        for (auto& x : issues) {
+          x.file = fmt::format("{} (point {}, --ensemble member {})", o.case_path, mine[k], m);
+          x.line = 0;
+        }
+        throw CaseError(issues);
+      }
     }
   }
   if (o.plan) {
@@ -317,6 +426,8 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
     };
     for (size_t i : mine) add(specs[i]);
     for (const auto& t : tight) add(t);
+    for (const auto& ms : member_specs)
+      for (const auto& m : ms) add(m);
     p.output_bytes = 420.0 * p.output_rows;
     o.plan(p);
   }
@@ -324,57 +435,94 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
   fs::create_directories(o.out, ec);
   if (ec) throw std::runtime_error("cannot create " + o.out + ": " + ec.message());
 
+  // One task per point (with its tight run) and per member, in point order: each writes only its
+  // own slot, so the threads share nothing but the task counter and the progress call.
+  struct Task {
+    size_t k;  ///< index in mine
+    int m;     ///< 0: the point, else the ensemble member
+  };
+  std::vector<Task> tasks;
+  for (size_t k = 0; k < mine.size(); ++k)
+    for (int m = 0; m <= members; ++m) tasks.push_back({k, m});
   std::vector<SweepRow> rows(mine.size());
+  for (size_t k = 0; k < mine.size(); ++k) {
+    rows[k].point = all[mine[k]];
+    rows[k].folder = (fs::path(o.out) / fmt::format("p{:04d}", mine[k])).string();
+    rows[k].members.resize(static_cast<size_t>(members));
+    for (int m = 1; m <= members; ++m)
+      rows[k].members[static_cast<size_t>(m - 1)].folder =
+          fmt::format("{}-e{:02d}", rows[k].folder, m);
+  }
   std::atomic<size_t> next{0};
   std::mutex mtx;
   long done = 0;
   auto worker = [&] {
-    for (size_t k = next++; k < mine.size(); k = next++) {
-      const size_t i = mine[k];
+    for (size_t t = next++; t < tasks.size(); t = next++) {
+      const auto [k, m] = tasks[t];
       SweepRow& row = rows[k];
-      row.point = all[i];
-      row.folder = (fs::path(o.out) / fmt::format("p{:04d}", i)).string();
-      if (o.stop && o.stop->load()) {  // interrupted: the rest is not run (--resume runs it)
+      const bool stopped = o.stop && o.stop->load();  // the rest is not run (--resume runs it)
+      if (m > 0) {
+        SweepMember& member = row.members[static_cast<size_t>(m - 1)];
+        if (stopped) {
+          member.termination = "not_run";
+          member.message = "the sweep was interrupted before this member";
+        } else {
+          const OneRun r = run_point(member_specs[k][static_cast<size_t>(m - 1)], member.folder,
+                                     o.analysis, o.resume, o.stop);
+          member.termination = r.termination;
+          member.message = r.message;
+          member.complete = r.complete;
+          member.v = r.v;
+        }
+      } else if (stopped) {
         row.termination = "not_run";
         row.message = "the sweep was interrupted before this point";
-        continue;
+      } else {
+        const OneRun r = run_point(specs[mine[k]], row.folder, o.analysis, o.resume, o.stop);
+        row.termination = r.termination;
+        row.message = r.message;
+        row.complete = r.complete;
+        row.wall_seconds = r.wall;
+        row.v = r.v;
+        if (o.certify) {
+          const OneRun t = run_point(tight[k], row.folder + "-tight", o.analysis, o.resume, o.stop);
+          row.certified_run = true;
+          row.tight_termination = t.termination;
+          row.tight = t.v;
+          row.certified = r.complete && t.complete && same_verdicts(r.v, t.v);
+        }
       }
-      const OneRun r = run_point(specs[i], row.folder, o.analysis, o.resume, o.stop);
-      row.termination = r.termination;
-      row.message = r.message;
-      row.complete = r.complete;
-      row.wall_seconds = r.wall;
-      row.v = r.v;
-      if (o.certify) {
-        const OneRun t = run_point(tight[k], row.folder + "-tight", o.analysis, o.resume, o.stop);
-        row.certified_run = true;
-        row.tight_termination = t.termination;
-        row.tight = t.v;
-        row.certified = r.complete && t.complete && same_verdicts(r.v, t.v);
-      }
+      if (stopped) continue;
       std::lock_guard<std::mutex> lock(mtx);
       ++done;
-      if (o.progress) o.progress(done, static_cast<long>(mine.size()));
+      if (o.progress) o.progress(done, static_cast<long>(tasks.size()));
     }
   };
-  const int n = std::max(1, std::min<int>(o.jobs, static_cast<int>(mine.size())));
+  const int n = std::max(1, std::min<int>(o.jobs, static_cast<int>(tasks.size())));
   std::vector<std::thread> pool;
   for (int j = 1; j < n; ++j) pool.emplace_back(worker);
   worker();
   for (auto& t : pool) t.join();
+  if (members > 0)
+    for (auto& row : rows) ensemble_stats(row);
 
   std::vector<std::string> keys;
   for (const auto& v : o.vary) keys.push_back(v.key);
-  const std::string table = sweep_csv(keys, rows, o.certify);
+  const std::string table = sweep_csv(keys, rows, o.certify, members > 0);
   if (o.shard.count == 1) {
     write_file_atomic((fs::path(o.out) / "sweep.csv").string(), table);
   } else {
     const std::string stem = fmt::format("sweep-shard-{}-of-{}", o.shard.index, o.shard.count);
-    write_file_atomic(
-        (fs::path(o.out) / (stem + ".json")).string(),
-        fmt::format("{{\"shard\": {}, \"shards\": {}, \"points_total\": {}, "
-                    "\"certify\": {}}}\n",
-                    o.shard.index, o.shard.count, all.size(), o.certify ? "true" : "false"));
+    // the ensemble's settings, which sweep-merge requires to be the same in every shard
+    const std::string ensemble =
+        members > 0 ? fmt::format("{{\"members\": {}, \"domega\": {}, \"offset\": {}}}", members,
+                                  o.ensemble.domega, o.ensemble.offset)
+                    : "{\"members\": 0}";
+    write_file_atomic((fs::path(o.out) / (stem + ".json")).string(),
+                      fmt::format("{{\"shard\": {}, \"shards\": {}, \"points_total\": {}, "
+                                  "\"certify\": {}, \"ensemble\": {}}}\n",
+                                  o.shard.index, o.shard.count, all.size(),
+                                  o.certify ? "true" : "false", ensemble));
     write_file_atomic((fs::path(o.out) / (stem + ".csv")).string(), table);
   }
   return rows;
@@ -400,7 +548,7 @@ long merge_sweep_shards(const std::string& out) {
     shards[i] = e.path();
   }
   if (count < 0) throw std::runtime_error(out + ": no sweep-shard-i-of-N.csv files");
-  std::string header, body;
+  std::string header, body, ensemble;
   std::map<long, std::string> lines;
   long total = -1;
   for (int i = 1; i <= count; ++i) {
@@ -422,6 +570,15 @@ long merge_sweep_shards(const std::string& out) {
       throw std::runtime_error(
           fmt::format("{}: points_total {} differs from {} of shard 1", side.string(), t, total));
     total = t;
+    // the same ensemble settings (none in a shard written before ensembles existed): the P
+    // columns of two different ensembles would look alike in one table
+    static const std::regex ens(R"("ensemble":\s*(\{[^}]*\}))");
+    const std::string e =
+        std::regex_search(text, m, ens) ? std::string(m[1]) : std::string("{\"members\": 0}");
+    if (i == 1) ensemble = e;
+    if (e != ensemble)
+      throw std::runtime_error(
+          fmt::format("{}: ensemble {} differs from {} of shard 1", side.string(), e, ensemble));
     const CsvTable table = read_csv(shards[i].string());
     if (header.empty()) header = table.header_text;
     if (table.header_text != header)

@@ -25,6 +25,7 @@ struct SweepArgs {
   long max_points = kDefaultMaxPoints;
   bool certify = false, quiet = false, resume = false;
   double min_turns = 1.0;
+  EnsembleOptions ensemble;
 };
 
 int sweep_command(const SweepArgs& a) {
@@ -48,6 +49,7 @@ int sweep_command(const SweepArgs& a) {
   if (a.max_points < 1) throw std::invalid_argument("--max-points must be >= 1");
   o.max_points = a.max_points;
   o.resume = a.resume;
+  o.ensemble = a.ensemble;  // checked by run_sweep with the other options
   o.plan = [](const SweepPlan& p) {
     std::printf(
         "plan          %ld points; this run: %ld runs, %.6g s simulated, about %.3g "
@@ -57,8 +59,9 @@ int sweep_command(const SweepArgs& a) {
   };
   const bool tty = !a.quiet && isatty(fileno(stderr));
   if (tty) {
-    o.progress = [](long done, long total) {
-      std::fprintf(stderr, "\r  sweep: %ld of %ld points done", done, total);
+    const char* unit = o.ensemble.members > 0 ? "points and members" : "points";
+    o.progress = [unit](long done, long total) {
+      std::fprintf(stderr, "\r  sweep: %ld of %ld %s done", done, total, unit);
       std::fflush(stderr);
     };
   }
@@ -66,7 +69,7 @@ int sweep_command(const SweepArgs& a) {
   o.stop = &stop_flag();
   const auto rows = run_sweep(o);
   if (tty) std::fprintf(stderr, "\r%60s\r", "");
-  long bad = 0, uncertified = 0, not_run = 0;
+  long bad = 0, uncertified = 0, not_run = 0, bad_members = 0;
   for (const auto& r : rows) {
     if (r.termination == "not_run") {
       ++not_run;
@@ -76,12 +79,22 @@ int sweep_command(const SweepArgs& a) {
                    r.folder.c_str(), r.termination.c_str(), r.message.c_str());
     }
     if (o.certify && !r.certified) ++uncertified;
+    for (const auto& m : r.members) {
+      if (m.termination == "not_run" || m.complete) continue;
+      ++bad_members;
+      std::fprintf(stderr,
+                   "rubdyn sweep: ensemble member %s ended early: %s: %s (left out of its "
+                   "point's P columns, counted in ensemble_incomplete)\n",
+                   m.folder.c_str(), m.termination.c_str(), m.message.c_str());
+    }
   }
   std::printf("sweep         %ld points run (%s), %ld ended early",
               static_cast<long>(rows.size()) - not_run, o.shard.count > 1 ? a.shard.c_str() : "all",
               bad);
   if (not_run > 0) std::printf(", %ld not run (interrupted)", not_run);
   if (o.certify) std::printf(", %ld verdicts depend on the tolerance", uncertified);
+  if (o.ensemble.members > 0)
+    std::printf("; %d ensemble members a point, %ld ended early", o.ensemble.members, bad_members);
   std::printf("\ntable         %s/%s\n", o.out.c_str(),
               o.shard.count > 1 ? "sweep-shard-*.csv (join with rubdyn sweep-merge)" : "sweep.csv");
   if (stop_flag().load()) {
@@ -90,7 +103,7 @@ int sweep_command(const SweepArgs& a) {
                  "run the same command with --resume to complete it\n");
     return kExitInterrupted;
   }
-  return bad > 0 ? kExitEarlyEnd : kExitOk;
+  return bad + bad_members > 0 ? kExitEarlyEnd : kExitOk;
 }
 
 }  // namespace
@@ -106,7 +119,21 @@ void add_sweep_commands(CLI::App& app, Action& action) {
   sub->add_option("--out", a->out, "sweep folder (default out/sweep)");
   sub->add_option("--shard", a->shard, "run slice i of N only (i/N), for job arrays");
   sub->add_flag("--certify", a->certify,
-                "re-run each point tighter and report whether its verdicts hold");
+                "re-run each point tighter and report whether its verdicts hold (numerics; "
+                "--ensemble says whether they survive a perturbation: physics)");
+  sub->add_option("--ensemble", a->ensemble.members,
+                  "also run each point as N perturbed members in OUT/pNNNN-eKK (0: off, the "
+                  "default; at most 1000): member k = 1..N starts at omega0 + domega (2 (k - 1) "
+                  "/ (N - 1) - 1) (N = 1: + domega), the rotor moved by offset (cos a, sin a) at "
+                  "R, a = 2 pi (k - 1) / N; sweep.csv adds ensemble_members (N + 1), "
+                  "ensemble_incomplete, p_limited, p_backward, p_whip, p_rolling (fractions of "
+                  "the complete runs), omega_max_min, omega_max_max")
+      ->type_name("N");
+  sub->add_option("--ensemble-domega", a->ensemble.domega,
+                  "largest change of omega0 in an ensemble [rad/s] (default 0.1)");
+  sub->add_option("--ensemble-offset", a->ensemble.offset,
+                  "initial offset of the rotor at R in an ensemble [m] (default 1e-7; below "
+                  "stator.gap)");
   sub->add_option("--solver", a->solver, solver_names(" | "));
   sub->add_option("--rtol", a->rtol, "event solver: relative tolerance");
   sub->add_option("--atol", a->atol, "event solver: absolute tolerance on positions [m]");
@@ -115,9 +142,11 @@ void add_sweep_commands(CLI::App& app, Action& action) {
   sub->add_option("--min-turns", a->min_turns,
                   "sustained whirl: orbit revolutions in one run (default 1)");
   sub->add_option("--max-points", a->max_points,
-                  "run sweeps of more points than this (default 10000: larger ones are refused)");
+                  "run sweeps of more points than this (default 10000: larger ones are refused; "
+                  "with --ensemble N, points x (N + 1) are counted)");
   sub->add_flag("--resume", a->resume,
-                "skip the points whose folder holds a complete run of the same resolved case");
+                "skip the points (and members) whose folder holds a complete run of the same "
+                "resolved case");
   sub->add_flag("--quiet", a->quiet, "no progress line");
   sub->callback([a, &action] { action = [a] { return sweep_command(*a); }; });
 

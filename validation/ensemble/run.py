@@ -2,27 +2,27 @@
 """Verdicts that survive perturbation: the paper's two thresholds stated as probabilities.
 
 For every grid point of a threshold study this runs the nominal case and N perturbed initial
-states (an ensemble), and, separately, `rubdyn sweep --certify` on the nominal point. Two columns
-come out, and they answer different questions:
+states (an ensemble, `rubdyn sweep --ensemble N`), and `--certify` on the nominal point, in one
+sweep per study. Two columns come out, and they answer different questions:
   certified  the nominal verdict does not depend on the numerical tolerance (rtol 1e-10 against
              1e-12): a statement about the solver;
   P(...)     the fraction of the ensemble that is limited / whips / rolls: a statement about the
              physics, i.e. how much the verdict depends on a perturbation of the initial state far
              below anything one could measure or control.
-Ensemble member k = 1..N (N = 8): omega0 + 0.1 (2 (k - 1) / (N - 1) - 1) rad/s (i.e. -0.1 ... +0.1,
-5e-5 relative, the size of the perturbation that flips k_s* = 7 in issue 14) together with the
-rotor released 0.1 um (5e-4 g0) off centre at R, in the direction 2 pi (k - 1) / N. Member 0 is
-the nominal case. Each member is one `rubdyn sweep` over the grid, so the perturbation is the
-same at every grid point.
+Ensemble member k = 1..N (N = 8; rubdyn sweep's defaults --ensemble-domega 0.1 and
+--ensemble-offset 1e-7, given here explicitly): omega0 + 0.1 (2 (k - 1) / (N - 1) - 1) rad/s (i.e.
+-0.1 ... +0.1, 5e-5 relative, the size of the perturbation that flips k_s* = 7 in issue 14)
+together with the rotor released 0.1 um (5e-4 g0) off centre at R, in the direction
+2 pi (k - 1) / N. Member 0 is the nominal case. The perturbation is the same at every grid point.
+P counts the runs that completed (a run that ended early is left out and reported).
 
 Studies, on cases/reference.toml and cases/paper.toml (run.t_end of each case):
   k_s threshold at mu = 0.1 (paper: limited for k_s* > 5 to 5.5): k_s* = 4 ... 10, step 0.5;
   mu threshold at k_s* = 1 (paper: 0.2 and 0.22 exceed Omega_lim, 0.25 does not):
   mu = 0.15 ... 0.27, step 0.01.
 Writes table.md and fig-ensemble.png here. Usage: validation/ensemble/run.py [path/to/rubdyn]
-[--quick]. About 3 min on 2 cores; runs go to out/ensemble/.
+[--quick]. 2-4 min on 2 cores; runs go to out/ensemble/<study>/ (pNNNN-eKK: the members).
 """
-import math
 import os
 import sys
 import tomllib
@@ -30,11 +30,10 @@ import tomllib
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
-from common import ROOT, machine, script_args, sweep  # noqa: E402
+from common import ROOT, machine, num, script_args, sweep  # noqa: E402
 
 RUBDYN, QUICK, OUT = script_args("ensemble")
 N = 8 if not QUICK else 2
@@ -45,42 +44,23 @@ KS = [4 + 0.5 * i for i in range(13)] if not QUICK else [5, 8]
 MUS = [round(0.15 + 0.01 * i, 2) for i in range(13)] if not QUICK else [0.2, 0.25]
 
 
-def member_sets(k):
-    if k == 0:
-        return []
-    om = D_OMEGA * (2 * (k - 1) / (N - 1) - 1) if N > 1 else D_OMEGA
-    a = 2 * math.pi * (k - 1) / N
-    return ["initial.omega0=%.10g" % (OMEGA0[0] + om), "initial.x_r=%.6g" % (R_OFF * math.cos(a)),
-            "initial.y_r=%.6g" % (R_OFF * math.sin(a))]
-
-
-OMEGA0 = [None]
-
-
 def study(case, name, key, values, sets):
-    """{value: {'p_limited', 'p_whip', 'p_roll', 'nominal', 'certified', 'omega_max': [..]}}"""
+    """{value: {'p_limited', 'p_whip', 'p_roll', 'nominal', 'certified', 'omega_max': (min, max),
+    'ended_early'}}"""
     spec = tomllib.load(open(case, "rb"))
-    OMEGA0[0] = spec["initial"]["omega0"]
     vary = [key + "=" + ",".join("%.9g" % v for v in values)]
-    runs = {}
-    for k in range(N + 1):
-        rows = sweep(RUBDYN, case, os.path.join(OUT, name, "m%02d" % k), spec["run"]["t_end"],
-                     vary, sets + member_sets(k))
-        for r in rows:
-            runs.setdefault(float(r[key]), []).append(r)
-    cert = sweep(RUBDYN, case, os.path.join(OUT, name, "certify"), spec["run"]["t_end"], vary,
-                 sets, ["--certify"])
+    rows = sweep(RUBDYN, case, os.path.join(OUT, name), spec["run"]["t_end"], vary, sets,
+                 ["--certify", "--ensemble", str(N), "--ensemble-domega", repr(D_OMEGA),
+                  "--ensemble-offset", repr(R_OFF)])
     out = {}
-    for r in cert:
-        v = float(r[key])
-        ens = runs[v]
-        out[v] = {
-            "p_limited": np.mean([e["limited"] == "yes" for e in ens]),
-            "p_whip": np.mean([float(e["whip_fraction"] or 0) > 0 for e in ens]),
-            "p_roll": np.mean([float(e["stick_fraction"] or 0) > 0 for e in ens]),
-            "omega_max": [float(e["omega_max"]) for e in ens],
+    for r in rows:
+        assert int(r["ensemble_members"]) == N + 1, r
+        out[float(r[key])] = {
+            "p_limited": num(r["p_limited"]), "p_whip": num(r["p_whip"]),
+            "p_roll": num(r["p_rolling"]),  # nan (empty) when no run of the point completed
+            "omega_max": (num(r["omega_max_min"]), num(r["omega_max_max"])),
             "nominal": r["limited"] == "yes", "certified": r["certified"] == "yes",
-            "ended_early": sum(e["complete"] != "yes" for e in ens)}
+            "ended_early": int(r["ensemble_incomplete"])}
     return out
 
 
@@ -136,9 +116,9 @@ def main():
                 r = res[v]
                 lines.append("| %g | %s | %s | %.2f | %.2f | %.2f | %.1f / %.1f%s |" % (
                     v, "yes" if r["nominal"] else "no", "yes" if r["certified"] else "**no**",
-                    r["p_limited"], r["p_whip"], r["p_roll"], min(r["omega_max"]),
-                    max(r["omega_max"]),
-                    " (%d ended early)" % r["ended_early"] if r["ended_early"] else ""))
+                    r["p_limited"], r["p_whip"], r["p_roll"], r["omega_max"][0],
+                    r["omega_max"][1], " (%d ended early, left out of P)" % r["ended_early"]
+                    if r["ended_early"] else ""))
             lines.append("")
             ax.plot(values, [res[v]["p_limited"] for v in values], "o-", label="P(limited)")
             ax.plot(values, [res[v]["p_whip"] for v in values], "s--", label="P(whip)")
