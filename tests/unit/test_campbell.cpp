@@ -313,7 +313,7 @@ int run_cli(const std::string& args, std::string* out = nullptr) {
 const std::string kRefCase = std::string(RUBDYN_SOURCE_DIR) + "/cases/reference.toml";
 }  // namespace
 
-TEST_CASE("rubdyn campbell writes campbell.csv; bad input exits 2 and writes nothing",
+TEST_CASE("rubdyn campbell writes campbell.csv, bad input exits 2 and writes nothing",
           "[campbell][cli]") {
   const fs::path dir =
       fs::temp_directory_path() / ("rubdyn-campbell-" + std::to_string(::getpid()));

@@ -127,7 +127,7 @@ TEST_CASE("Statics without gravity and the outcomes of the free acceleration", "
         FreeAcceleration::never);
 }
 
-TEST_CASE("rubdyn check prints the derived quantities; bad input exits 2", "[check][cli]") {
+TEST_CASE("rubdyn check prints the derived quantities, bad input exits 2", "[check][cli]") {
   const fs::path log =
       fs::temp_directory_path() / ("rubdyn-check-cli-" + std::to_string(::getpid()) + ".log");
   auto run = [&](const std::string& args, std::string& out) {

@@ -36,7 +36,7 @@ TEST_CASE("read_csv: rows, columns, a cut last row dropped with a warning", "[io
   CHECK_FALSE(parse_number("", x));
 }
 
-TEST_CASE("read_csv: a wrong field count names the line; an empty file", "[io][unit]") {
+TEST_CASE("read_csv: a wrong field count names the line, and an empty file", "[io][unit]") {
   const std::string bad = write("bad.csv", "t,x\n0,1\n0.5,2,3\n");
   CHECK_THROWS_WITH(read_csv(bad), Catch::Contains(bad + ":3: 3 fields, the header has 2"));
   const std::string empty = write("empty.csv", "");

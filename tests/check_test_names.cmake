@@ -1,0 +1,20 @@
+# ctest splits a test name at ';' (a CMake list separator): catch_discover_tests then registers a
+# test whose filter matches no test case, which runs nothing and passes. This check fails when any
+# TEST_CASE name of the test program contains ';'. Usage: cmake -DEXE=rubdyn_tests -P this file.
+# (Catch v2 exits with the number of tests listed, not 0: the output is checked instead)
+execute_process(COMMAND ${EXE} --list-test-names-only OUTPUT_VARIABLE names)
+if(NOT names MATCHES "rubdyn")
+  message(FATAL_ERROR "${EXE} --list-test-names-only listed no test")
+endif()
+string(REPLACE ";" "<SEMICOLON>" names "${names}")
+string(REPLACE "\n" ";" lines "${names}")
+set(bad "")
+foreach(line IN LISTS lines)
+  if(line MATCHES "<SEMICOLON>")
+    string(REPLACE "<SEMICOLON>" ";" line "${line}")
+    string(APPEND bad "\n  ${line}")
+  endif()
+endforeach()
+if(bad)
+  message(FATAL_ERROR "test names with ';' (ctest would run nothing for them):${bad}")
+endif()
