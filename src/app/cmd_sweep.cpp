@@ -129,11 +129,11 @@ void add_sweep_commands(CLI::App& app, Action& action) {
                   "ensemble_incomplete, p_limited, p_backward, p_whip, p_rolling (fractions of "
                   "the complete runs), omega_max_min, omega_max_max")
       ->type_name("N");
-  sub->add_option("--ensemble-domega", a->ensemble.domega,
-                  "largest change of omega0 in an ensemble [rad/s] (default 0.1)");
-  sub->add_option("--ensemble-offset", a->ensemble.offset,
-                  "initial offset of the rotor at R in an ensemble [m] (default 1e-7; below "
-                  "stator.gap)");
+  auto* domega = sub->add_option("--ensemble-domega", a->ensemble.domega,
+                                 "largest change of omega0 in an ensemble [rad/s] (default 0.1)");
+  auto* offset = sub->add_option("--ensemble-offset", a->ensemble.offset,
+                                 "initial offset of the rotor at R in an ensemble [m] (default "
+                                 "1e-7; below stator.gap)");
   sub->add_option("--solver", a->solver, solver_names(" | "));
   sub->add_option("--rtol", a->rtol, "event solver: relative tolerance");
   sub->add_option("--atol", a->atol, "event solver: absolute tolerance on positions [m]");
@@ -148,7 +148,13 @@ void add_sweep_commands(CLI::App& app, Action& action) {
                 "skip the points (and members) whose folder holds a complete run of the same "
                 "resolved case");
   sub->add_flag("--quiet", a->quiet, "no progress line");
-  sub->callback([a, &action] { action = [a] { return sweep_command(*a); }; });
+  sub->callback([a, &action, domega, offset] {
+    // an ensemble setting without an ensemble would be ignored silently: refused instead
+    for (const auto* opt : {domega, offset})
+      if (opt->count() > 0 && a->ensemble.members == 0)
+        throw CLI::ValidationError(opt->get_name(), "applies to an ensemble: give --ensemble N");
+    action = [a] { return sweep_command(*a); };
+  });
 
   auto out = std::make_shared<std::string>();
   auto* merge = app.add_subcommand("sweep-merge", "Join the shard tables of a sweep folder");

@@ -275,6 +275,9 @@ TEST_CASE("sweep --ensemble: bad options are refused, exit 2, before any folder 
       {"--ensemble 2 --set initial.x_r=1.5e-4 --ensemble-offset 9e-05", "--ensemble member 1"},
       // 2 points x (1 + 2) runs against --max-points
       {"--ensemble 2 --max-points 5", "6 runs (2 points x 3 with --ensemble 2)"},
+      // an ensemble setting without an ensemble (it would be ignored)
+      {"--ensemble-domega 0.2", "--ensemble-domega: applies to an ensemble"},
+      {"--ensemble 0 --ensemble-offset 1e-8", "--ensemble-offset: applies to an ensemble"},
   };
   for (const auto& [args, says] : bad) {
     const Outcome o = cli(base + " " + args);
