@@ -128,7 +128,7 @@ py::dict event_columns(const std::vector<EventRecord>& events) {
 /// every 50 ms the calling thread takes the GIL to let Python handle its signals (only the main
 /// thread can): Ctrl-C sets the solver's stop flag, the run ends at its next output sample (a
 /// fixed-step run: its next step) and KeyboardInterrupt is raised. `progress` is called from the
-/// worker at output samples (event-driven solver), at most every progress_interval seconds of
+/// worker at output samples (every solver), at most every progress_interval seconds of
 /// wall time; an exception it raises stops the run the same way and is re-raised.
 py::tuple run_case(const Case& c, const py::object& progress, double progress_interval) {
   MemorySink sink;

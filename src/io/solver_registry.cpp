@@ -36,7 +36,7 @@ std::vector<std::string> tighter_event(const CaseSpec& s) {
 
 template <FixedStepScheme scheme>
 RunSummary run_fixed(const CaseSpec& spec, const LagrangianModel& model, const MechanicalState& s0,
-                     OutputSink& sink, const ProgressFn&, const std::atomic<bool>* stop) {
+                     OutputSink& sink, const ProgressFn& progress, const std::atomic<bool>* stop) {
   FixedStepOptions opt;
   opt.scheme = scheme;
   opt.h = spec.solver.h;
@@ -49,6 +49,7 @@ RunSummary run_fixed(const CaseSpec& spec, const LagrangianModel& model, const M
   opt.output_dt = spec.output.dt;
   opt.omega_lim = spec.run.omega_lim;
   opt.stop = stop;
+  opt.progress = progress;
   opt.max_wall = spec.run.max_wall;
   return run_fixed_step(model, s0, spec.run.t_end, opt, sink);
 }

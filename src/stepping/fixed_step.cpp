@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <numeric>
 #include <stdexcept>
 
 #include "rubdyn/core/demand.hpp"
@@ -142,6 +143,9 @@ void RunLoop::record(const StepReport& r, double t) {
     s.F_T = r.F_T;
     s.phase = r.phase;
     sink_.sample(s);
+    if (o_.progress)
+      o_.progress(t, std::accumulate(sum_.events.begin(), sum_.events.end(), 0L), m_.spin(r.v),
+                  r.phase);
   }
 }
 

@@ -10,6 +10,7 @@
 // Each scheme is a Stepper (stepper.hpp; carpenter.cpp, moreau_jean.cpp state the decisions the
 // paper leaves open where they are taken); run_fixed_step is their one run loop.
 #include <atomic>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -41,6 +42,8 @@ struct FixedStepOptions {
   /// When set and true (a signal handler sets it), the run ends before its next step with
   /// Termination::Interrupted, keeping what it wrote.
   const std::atomic<bool>* stop = nullptr;
+  /// Called at output samples with (t, events so far, omega, phase); may be empty.
+  std::function<void(double, long, double, Phase)> progress;
   /// Wall-time budget [s], 0 = none: once spent, the run ends before its next step (the clock
   /// is read every 1024 steps) with Termination::TimeBudget, keeping what it wrote.
   double max_wall = 0.0;
