@@ -25,17 +25,24 @@ fs::path tmp(const std::string& name) {
   return p;
 }
 
+// The reference case as case.resolved.toml in `dir` and timeseries.csv opened there with its
+// header written (rows follow with 17 digits): an output folder built by hand.
+std::ofstream timeseries(const fs::path& dir) {
+  fs::copy_file(kRef, dir / "case.resolved.toml");
+  std::ofstream f(dir / "timeseries.csv");
+  f << "t,x_b,y_b,x_r,y_r,theta,x_s,y_s,vx_b,vy_b,vx_r,vy_r,omega,vx_s,vy_s,d_N,v_N,v_t,F_N,F_T,"
+       "phase\n";
+  f.precision(17);
+  return f;
+}
+
 // An output folder whose rotor runs on the circle of radius a about the (fixed) stator centre at
 // angular speed w (w < 0: clockwise, backward for a positive spin), sampled every dt, in the
 // given phase, with F_T constant.
 fs::path circular_run(const std::string& name, double a, double w, double dt, int n,
                       const char* phase, double F_T, double t_contact = 0.0) {
   const fs::path dir = tmp(name);
-  fs::copy_file(kRef, dir / "case.resolved.toml");
-  std::ofstream f(dir / "timeseries.csv");
-  f << "t,x_b,y_b,x_r,y_r,theta,x_s,y_s,vx_b,vy_b,vx_r,vy_r,omega,vx_s,vy_s,d_N,v_N,v_t,F_N,F_T,"
-       "phase\n";
-  f.precision(17);
+  std::ofstream f = timeseries(dir);
   for (int k = 0; k < n; ++k) {
     const double t = k * dt;
     const double x = a * std::cos(w * t), y = a * std::sin(w * t);
@@ -143,11 +150,7 @@ TEST_CASE("postprocess: a backward orbit in flight is a precession-sign whirl, n
 TEST_CASE("postprocess: a run ending in flight has no permanent contact", "[post]") {
   // contact first, flight from t_c on: the rotor lifted off and did not come back
   const fs::path dir = tmp("contact-then-flight");
-  fs::copy_file(kRef, dir / "case.resolved.toml");
-  std::ofstream f(dir / "timeseries.csv");
-  f << "t,x_b,y_b,x_r,y_r,theta,x_s,y_s,vx_b,vy_b,vx_r,vy_r,omega,vx_s,vy_s,d_N,v_N,v_t,F_N,F_T,"
-       "phase\n";
-  f.precision(17);
+  std::ofstream f = timeseries(dir);
   for (int k = 0; k < 1000; ++k)
     f << k * 1e-4 << ",0,0,0,-1e-4,0,0,0,0,0,0,0,2000,0,0,1e-4,0,0,0,0,"
       << (k < 500 ? "slip-" : "free") << "\n";
@@ -165,11 +168,7 @@ TEST_CASE("postprocess: rocking to and fro in contact is not a sustained whirl",
   // no run covers a full turn, so there is no whirl verdict (the reference case's persistent
   // sliding at the bottom of the stator looks like this)
   const fs::path dir = tmp("rocking");
-  fs::copy_file(kRef, dir / "case.resolved.toml");
-  std::ofstream f(dir / "timeseries.csv");
-  f << "t,x_b,y_b,x_r,y_r,theta,x_s,y_s,vx_b,vy_b,vx_r,vy_r,omega,vx_s,vy_s,d_N,v_N,v_t,F_N,F_T,"
-       "phase\n";
-  f.precision(17);
+  std::ofstream f = timeseries(dir);
   const double a = 2e-4, W = 2 * M_PI * 50;
   for (int k = 0; k < 2000; ++k) {
     const double t = k * 1e-4, phi = -M_PI / 2 + 0.3 * std::sin(W * t);

@@ -20,6 +20,7 @@
 
 #include "rubdyn/analysis/sweep.hpp"
 #include "rubdyn/io/case_io.hpp"
+#include "support/cli.hpp"
 
 namespace fs = std::filesystem;
 using namespace rubdyn;
@@ -28,50 +29,8 @@ namespace {
 
 const std::string kRef = std::string(RUBDYN_SOURCE_DIR) + "/cases/reference.toml";
 
-fs::path fresh_dir(const std::string& tag) {
-  const fs::path d =
-      fs::temp_directory_path() / ("rubdyn-ensemble-" + tag + "-" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  return d;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-/// Quotes one argument for /bin/sh.
-std::string sh(const std::string& a) {
-  std::string q = "'";
-  for (char c : a) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-struct Outcome {
-  int code = -1;
-  std::string out, err;
-};
-
-/// Runs `rubdyn ARGS` (ARGS already quoted for the shell); stdout and stderr kept.
-Outcome cli(const std::string& args) {
-  const fs::path out = fresh_dir("stdout"), err = fresh_dir("stderr");
-  const std::string cmd =
-      std::string(RUBDYN_CLI) + " " + args + " > " + sh(out.string()) + " 2> " + sh(err.string());
-  const int st = std::system(cmd.c_str());
-  Outcome o;
-  o.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  o.out = slurp(out);
-  o.err = slurp(err);
-  fs::remove(out);
-  fs::remove(err);
-  return o;
-}
-
-bool has(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
+using namespace rubdyn::testing;  // fresh_dir, slurp, sh, has, cli (support/cli.hpp)
+using Outcome = CliOutcome;
 
 using Row = std::map<std::string, std::string>;
 
