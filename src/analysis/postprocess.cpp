@@ -29,7 +29,7 @@ double fraction(const std::vector<DerivedSample>& d, double t0, double t1, Pred 
   double acc = 0.0;
   for (size_t i = 0; i + 1 < d.size(); ++i) {
     const double a = std::max(d[i].t, t0), b = std::min(d[i + 1].t, t1);
-    if (b > a && pred(d[i])) acc += b - a;
+    if (b > a && pred(i)) acc += b - a;
   }
   return t1 > t0 ? acc / (t1 - t0) : 0.0;
 }
@@ -236,9 +236,8 @@ RunVerdicts verdicts(const RunRecord& r, std::vector<DerivedSample>& d, const An
   }
   v.limited = !v.t_omega_lim.has_value();
   v.mean_friction_torque_ratio = torque_integral / (t1 - t0);
-  auto contact = [](const DerivedSample& x) { return x.regime != Regime::Free; };
-  v.contact_fraction = fraction(d, t0, t1, contact);
-  v.stick_fraction = fraction(d, t0, t1, [](auto& x) { return x.regime == Regime::Rolling; });
+  v.contact_fraction = fraction(d, t0, t1, [&](size_t i) { return d[i].regime != Regime::Free; });
+  v.stick_fraction = fraction(d, t0, t1, [&](size_t i) { return d[i].regime == Regime::Rolling; });
   const auto bwd = sustained_runs(d, t0, t1, Whirl::Backward, o.min_turns);
   const auto fwd = sustained_runs(d, t0, t1, Whirl::Forward, o.min_turns);
   for (size_t i = 0; i < d.size(); ++i) {
@@ -263,21 +262,14 @@ RunVerdicts verdicts(const RunRecord& r, std::vector<DerivedSample>& d, const An
   } else if (*last_free + 1 < d.size() && d[*last_free + 1].t <= t1) {
     v.permanent_contact_onset = d[*last_free + 1].t;
   }
-  // fraction() sees the sample, not its index: mark through a parallel copy
-  std::vector<DerivedSample> b = d, f = d, sb = d;
-  for (size_t i = 0; i < d.size(); ++i) {
-    b[i].sustained = bwd[i];
-    f[i].sustained = fwd[i];
-    sb[i].sustained = sign_bwd[i];
-  }
-  auto sus = [](const DerivedSample& x) { return x.sustained; };
-  v.backward_fraction = fraction(b, t0, t1, sus);
+  auto marked = [](const std::vector<char>& m) { return [&m](size_t i) { return m[i] != 0; }; };
+  v.backward_fraction = fraction(d, t0, t1, marked(bwd));
   v.whip_fraction =
-      fraction(b, t0, t1, [](auto& x) { return x.sustained && x.regime == Regime::Sliding; });
+      fraction(d, t0, t1, [&](size_t i) { return bwd[i] && d[i].regime == Regime::Sliding; });
   v.whirl_fraction =
-      fraction(b, t0, t1, [](auto& x) { return x.sustained && x.regime == Regime::Rolling; });
-  v.forward_fraction = fraction(f, t0, t1, sus);
-  v.sign_backward_fraction = fraction(sb, t0, t1, sus);
+      fraction(d, t0, t1, [&](size_t i) { return bwd[i] && d[i].regime == Regime::Rolling; });
+  v.forward_fraction = fraction(d, t0, t1, marked(fwd));
+  v.sign_backward_fraction = fraction(d, t0, t1, marked(sign_bwd));
   return v;
 }
 
