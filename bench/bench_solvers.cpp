@@ -26,7 +26,7 @@ class NullSink final : public OutputSink {
 };
 
 MechanicalState reference_start() {
-  MechanicalState s;
+  MechanicalState s(RotorStatorModel::kDofs);
   s.v[TH] = 2000.0;
   return s;
 }

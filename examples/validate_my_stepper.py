@@ -48,12 +48,12 @@ def my_step(model, t, q, v, h):
 def run_my_scheme(case, model, h, t_end):
     n = int(round(t_end / h))
     q, v = np.array(case.q0), np.array(case.v0)
-    out = np.empty((n + 1, 1 + 2 * 7))
+    out = np.empty((n + 1, 1 + 2 * model.num_dofs))
     out[0] = np.concatenate([[0.0], q, v])
     for i in range(n):
         q, v = my_step(model, i * h, q, v, h)
         out[i + 1] = np.concatenate([[(i + 1) * h], q, v])
-    names = ["t"] + list(rubdyn._core.DOF_NAMES) + list(rubdyn._core.VEL_NAMES)
+    names = ["t"] + model.position_names + model.rate_names
     return {name: out[:, j] for j, name in enumerate(names)}
 
 

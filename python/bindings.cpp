@@ -23,15 +23,22 @@
 #include "rubdyn/core/run_types.hpp"
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/columns.hpp"
+#include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/io/output_folder.hpp"
 #include "rubdyn/io/simulate.hpp"
 #include "rubdyn/io/solver_registry.hpp"
-#include "rubdyn/model/rotor_stator_model.hpp"
+#include "rubdyn/model/lagrangian_model.hpp"
 
 namespace py = pybind11;
 using namespace rubdyn;
 
 namespace {
+
+std::string fmt_size(const char* what, Eigen::Index got, int want) {
+  return std::string(what) + " has " + std::to_string(got) + " entries, the model " +
+         std::to_string(want);
+}
 
 /// A validated case and how it was made: run() reloads the file with the extra overrides, as the
 /// CLI does (load_case(path, --set ... + solver options)), so that the numbers are the CLI's.
@@ -68,59 +75,54 @@ py::array_t<T> to_array(std::vector<T>&& v) {
   return a;
 }
 
-/// Samples as columns named as in timeseries.csv; phase as its code (Phase enum value).
-py::dict sample_columns(const std::vector<Sample>& samples) {
+/// Samples as columns named as in timeseries.csv (the model's column table, io/columns.hpp);
+/// phase columns as their codes (Phase enum values).
+py::dict sample_columns(const LagrangianModel& model, const std::vector<Sample>& samples) {
   const std::size_t n = samples.size();
   py::dict d;
-  auto column = [&](const char* name, auto get) {
+  for (const SampleColumn& c : timeseries_columns(model)) {
+    if (c.field == SampleField::Phase) {
+      std::vector<std::int8_t> phase(n);
+      for (std::size_t i = 0; i < n; ++i)
+        phase[i] =
+            static_cast<std::int8_t>(samples[i].contacts[static_cast<std::size_t>(c.index)].phase);
+      d[py::str(c.name)] = to_array(std::move(phase));
+      continue;
+    }
     std::vector<double> v(n);
-    for (std::size_t i = 0; i < n; ++i) v[i] = get(samples[i]);
-    d[name] = to_array(std::move(v));
-  };
-  column("t", [](const Sample& s) { return s.t; });
-  for (int j = 0; j < kNumDofs; ++j) column(kDofNames[j], [j](const Sample& s) { return s.q[j]; });
-  for (int j = 0; j < kNumDofs; ++j) column(kVelNames[j], [j](const Sample& s) { return s.v[j]; });
-  column("d_N", [](const Sample& s) { return s.d_N; });
-  column("v_N", [](const Sample& s) { return s.v_N; });
-  column("v_t", [](const Sample& s) { return s.v_t; });
-  column("F_N", [](const Sample& s) { return s.F_N; });
-  column("F_T", [](const Sample& s) { return s.F_T; });
-  std::vector<std::int8_t> phase(n);
-  for (std::size_t i = 0; i < n; ++i) phase[i] = static_cast<std::int8_t>(samples[i].phase);
-  d["phase"] = to_array(std::move(phase));
+    for (std::size_t i = 0; i < n; ++i) v[i] = sample_value(samples[i], c);
+    d[py::str(c.name)] = to_array(std::move(v));
+  }
   return d;
 }
 
-/// Events as columns named as in events.csv (kinds and phases as the CSV's words).
-py::dict event_columns(const std::vector<EventRecord>& events) {
-  const std::size_t n = events.size();
+/// Events as columns named as in events.csv (kinds and phases as the CSV's words; the table of
+/// io/columns.hpp).
+py::dict event_columns_of(const std::vector<EventRecord>& events, int contacts) {
   py::dict d;
-  auto number = [&](const char* name, auto get) {
-    std::vector<double> v(n);
-    for (std::size_t i = 0; i < n; ++i) v[i] = get(events[i]);
-    d[name] = to_array(std::move(v));
-  };
-  auto text = [&](const char* name, auto get) {
+  for (const EventColumn& c : event_columns(contacts)) {
+    if (c.field == EventField::Number || c.field == EventField::Time ||
+        c.field == EventField::Contact) {
+      std::vector<double> v(events.size());
+      for (std::size_t i = 0; i < events.size(); ++i) v[i] = event_number(events[i], c.name);
+      d[py::str(c.name)] = to_array(std::move(v));
+      continue;
+    }
     py::list l;
-    for (const auto& e : events) l.append(py::str(std::string(get(e))));
-    d[name] = l;
-  };
-  number("t", [](const EventRecord& e) { return e.t; });
-  text("kind", [](const EventRecord& e) { return to_string(e.kind); });
-  text("phase_before", [](const EventRecord& e) { return to_string(e.phase_before); });
-  text("phase_after", [](const EventRecord& e) { return to_string(e.phase_after); });
-  number("d_N", [](const EventRecord& e) { return e.d_N; });
-  number("v_N_minus", [](const EventRecord& e) { return e.v_N_minus; });
-  number("v_N_plus", [](const EventRecord& e) { return e.v_N_plus; });
-  number("v_t_minus", [](const EventRecord& e) { return e.v_t_minus; });
-  number("v_t_plus", [](const EventRecord& e) { return e.v_t_plus; });
-  number("P_N", [](const EventRecord& e) { return e.P_N; });
-  number("P_T", [](const EventRecord& e) { return e.P_T; });
-  number("F_N", [](const EventRecord& e) { return e.F_N; });
-  number("F_T", [](const EventRecord& e) { return e.F_T; });
-  number("t_accumulation", [](const EventRecord& e) { return e.t_accumulation; });
-  text("witness", [](const EventRecord& e) { return e.witness; });
-  text("note", [](const EventRecord& e) { return e.note; });
+    for (const auto& e : events) {
+      switch (c.field) {
+        case EventField::Kind: l.append(py::str(std::string(to_string(e.kind)))); break;
+        case EventField::PhaseBefore:
+          l.append(py::str(std::string(to_string(e.phase_before))));
+          break;
+        case EventField::PhaseAfter:
+          l.append(py::str(std::string(to_string(e.phase_after))));
+          break;
+        default: l.append(py::str(event_text(e, c.name))); break;
+      }
+    }
+    d[py::str(c.name)] = l;
+  }
   return d;
 }
 
@@ -179,7 +181,9 @@ py::tuple run_case(const Case& c, const py::object& progress, double progress_in
     PyErr_SetNone(PyExc_KeyboardInterrupt);
     throw py::error_already_set();
   }
-  return py::make_tuple(sample_columns(sink.samples), event_columns(sink.events),
+  const std::unique_ptr<LagrangianModel> model = build_model(c.spec);
+  return py::make_tuple(sample_columns(*model, sink.samples),
+                        event_columns_of(sink.events, model->contact_count()),
                         summary_json(summary));
 }
 
@@ -209,16 +213,10 @@ py::dict campbell_dict(const CampbellDiagram& d) {
   auto arr = [](const std::vector<double>& v) { return to_array(std::vector<double>(v)); };
   r["damped"] = d.damped;
   r["omega"] = arr(d.omega);
-  for (const auto& [name, v] : {std::pair{"f1b", &d.f1b}, std::pair{"f1f", &d.f1f},
-                                std::pair{"f2b", &d.f2b}, std::pair{"f2f", &d.f2f}}) {
-    r[name] = arr(*v);
-  }
-  if (d.damped) {
-    for (const auto& [name, v] :
-         {std::pair{"zeta_1b", &d.zeta_1b}, std::pair{"zeta_1f", &d.zeta_1f},
-          std::pair{"zeta_2b", &d.zeta_2b}, std::pair{"zeta_2f", &d.zeta_2f}}) {
-      r[name] = arr(*v);
-    }
+  r["labels"] = d.labels;
+  for (std::size_t k = 0; k < d.labels.size(); ++k) {
+    r[py::str(d.labels[k])] = arr(d.f[k]);
+    if (d.damped) r[py::str("zeta_" + d.labels[k].substr(1))] = arr(d.zeta[k]);
   }
   r["labels_ok"] = d.labels_ok();
   r["unlabelled"] = arr(d.unlabelled);
@@ -246,28 +244,38 @@ py::tuple analyze_columns(const Case& c, const py::dict& columns, long events, d
   r.dir = c.spec.source;
   r.spec = c.spec;
   r.events = events;
-  r.samples.resize(n);
-  auto fill = [&](const char* name, auto set) {
-    const auto a = col(name);
+  const std::unique_ptr<LagrangianModel> model = build_model(c.spec);
+  r.samples.assign(n, Sample(model->num_dofs(), model->contact_count()));
+  for (const SampleColumn& sc : timeseries_columns(*model)) {
+    const auto a = col(sc.name.c_str());
     if (static_cast<std::size_t>(a.size()) != n)
-      throw py::value_error(std::string("column ") + name + " is not as long as t");
-    for (std::size_t i = 0; i < n; ++i) set(r.samples[i], a.at(static_cast<py::ssize_t>(i)));
-  };
-  fill("t", [](Sample& s, double x) { s.t = x; });
-  for (int j = 0; j < kNumDofs; ++j) {
-    fill(kDofNames[j], [j](Sample& s, double x) { s.q[j] = x; });
-    fill(kVelNames[j], [j](Sample& s, double x) { s.v[j] = x; });
+      throw py::value_error("column " + sc.name + " is not as long as t");
+    for (std::size_t i = 0; i < n; ++i) {
+      const double x = a.at(static_cast<py::ssize_t>(i));
+      Sample& s = r.samples[i];
+      switch (sc.field) {
+        case SampleField::Time: s.t = x; break;
+        case SampleField::Position: s.q[sc.index] = x; break;
+        case SampleField::Velocity: s.v[sc.index] = x; break;
+        default: {
+          ContactSample& k = s.contacts[static_cast<std::size_t>(sc.index)];
+          switch (sc.field) {
+            case SampleField::Gap: k.d_N = x; break;
+            case SampleField::GapRate: k.v_N = x; break;
+            case SampleField::SlipSpeed: k.v_t = x; break;
+            case SampleField::NormalForce: k.F_N = x; break;
+            case SampleField::TangentialForce: k.F_T = x; break;
+            case SampleField::Phase:
+              if (!(x >= 0 && x <= static_cast<double>(Phase::Stick) && x == static_cast<int>(x)))
+                throw py::value_error("phase codes must be 0 (free) to 3 (stick)");
+              k.phase = static_cast<Phase>(static_cast<int>(x));
+              break;
+            default: break;
+          }
+        }
+      }
+    }
   }
-  fill("d_N", [](Sample& s, double x) { s.d_N = x; });
-  fill("v_N", [](Sample& s, double x) { s.v_N = x; });
-  fill("v_t", [](Sample& s, double x) { s.v_t = x; });
-  fill("F_N", [](Sample& s, double x) { s.F_N = x; });
-  fill("F_T", [](Sample& s, double x) { s.F_T = x; });
-  fill("phase", [](Sample& s, double x) {
-    if (!(x >= 0 && x <= static_cast<double>(Phase::Stick) && x == static_cast<int>(x)))
-      throw py::value_error("phase codes must be 0 (free) to 3 (stick)");
-    s.phase = static_cast<Phase>(static_cast<int>(x));
-  });
   std::vector<DerivedSample> d = derive(r);
   const RunVerdicts v = verdicts(r, d, o);
   py::dict out;
@@ -297,10 +305,12 @@ py::tuple analyze_columns(const Case& c, const py::dict& columns, long events, d
 py::dict kinematics_dict(const ContactKinematics& k) {
   py::dict d;
   d["d_N"] = k.d_N;
-  d["W_N"] = Vec7(k.W_N);
-  d["W_T"] = Vec7(k.W_T);
+  d["W_N"] = k.W_N;
+  d["W_T"] = k.W_T;
   d["v_N"] = k.v_N;
   d["v_t"] = k.v_t;
+  d["b_N"] = k.b_N;
+  d["b_T"] = k.b_T;
   d["wdot_N"] = k.wdot_N;
   d["wdot_T"] = k.wdot_T;
   d["normal_defined"] = k.normal_defined;
@@ -347,12 +357,25 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("t_end", [](const Case& c) { return c.spec.run.t_end; })
       .def_property_readonly("omega_lim", [](const Case& c) { return c.spec.run.omega_lim; })
       .def_property_readonly("output_dt", [](const Case& c) { return c.spec.output.dt; })
-      .def_property_readonly("gap", [](const Case& c) { return c.spec.params.stator.gap; })
-      .def_property_readonly("radius", [](const Case& c) { return c.spec.params.rotor.radius; })
-      .def_property_readonly("mu", [](const Case& c) { return c.spec.params.contact.mu; })
-      .def_property_readonly("torque", [](const Case& c) { return c.spec.params.loads.torque; })
-      .def_property_readonly("q0", [](const Case& c) { return Vec7(c.spec.initial.q0); })
-      .def_property_readonly("v0", [](const Case& c) { return Vec7(c.spec.initial.v0); })
+      .def_property_readonly("model",
+                             [](const Case& c) { return std::string(build_model(c.spec)->name()); })
+      .def_property_readonly("gap", [](const Case& c) { return build_model(c.spec)->gap_scale(0); })
+      .def_property_readonly("radius",
+                             [](const Case& c) { return build_model(c.spec)->contact_radius(0); })
+      .def_property_readonly("mu",
+                             [](const Case& c) { return build_model(c.spec)->contact_law(0).mu; })
+      .def_property_readonly("torque", [](const Case& c) { return nominal_torque(c.spec); })
+      .def_property_readonly("q0", [](const Case& c) { return Vec(c.spec.initial.q0); })
+      .def_property_readonly("v0", [](const Case& c) { return Vec(c.spec.initial.v0); })
+      .def_property_readonly(
+          "columns",
+          [](const Case& c) {
+            std::vector<std::string> names;
+            for (const auto& sc : timeseries_columns(*build_model(c.spec)))
+              names.push_back(sc.name);
+            return names;
+          },
+          "timeseries.csv's columns for this case's model")
       .def_property_readonly("output_folder", [](const Case& c) { return output_folder(c.spec); })
       .def(
           "to_toml", [](const Case& c) { return to_toml(c.spec); },
@@ -393,8 +416,10 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "campbell",
       [](const Case& c, std::optional<double> omega_max, int points, bool damped) {
-        return campbell_dict(compute_campbell_diagram(
-            c.spec.params, omega_max.value_or(c.spec.run.omega_lim), points, damped));
+        const auto lm = build_model(c.spec)->linearize(Linearization::Tied);
+        if (!lm) throw py::value_error("this case's model has no linearisation");
+        return campbell_dict(compute_campbell_diagram(*lm, omega_max.value_or(c.spec.run.omega_lim),
+                                                      points, damped));
       },
       py::arg("case"), py::arg("omega_max") = py::none(), py::arg("points") = 201,
       py::arg("damped") = false);
@@ -433,61 +458,149 @@ PYBIND11_MODULE(_core, m) {
       py::arg("values_b"), py::arg("events_b"), py::arg("window") = py::none(),
       py::arg("event_tol") = 1e-3);
 
-  // The model's mechanics, for a user's own time-stepping scheme:
+  // The model's mechanics, for a user's own time-stepping scheme (any model of the registry):
   //   M(q) dv/dt = f(t, q, v) + W_N(q) F_N + W_T(q) F_T,  dq/dt = v.
-  py::class_<RotorStatorModel>(m, "Model",
-                               "The rotor-stator model of a case: M(q), f(t, q, v), contact")
-      .def(py::init([](const Case& c) { return RotorStatorModel(c.spec.params); }), py::arg("case"))
+  using ModelPtr = std::shared_ptr<LagrangianModel>;
+  auto check_size = [](const ModelPtr& m, const Vec& x, const char* what) {
+    if (x.size() != m->num_dofs()) throw py::value_error(fmt_size(what, x.size(), m->num_dofs()));
+  };
+  py::class_<LagrangianModel, ModelPtr>(
+      m, "Model", "The model of a case (any [model] kind): M(q), f(t, q, v), contact, coordinates")
+      .def(py::init([](const Case& c) { return ModelPtr(build_model(c.spec)); }), py::arg("case"))
+      .def_property_readonly("name", [](const ModelPtr& mdl) { return std::string(mdl->name()); })
+      .def_property_readonly("num_dofs", [](const ModelPtr& mdl) { return mdl->num_dofs(); })
+      .def_property_readonly(
+          "coordinates",
+          [](const ModelPtr& mdl) {
+            py::list l;
+            for (const auto& c : mdl->coordinates()) {
+              py::dict d;
+              d["name"] = c.name;
+              d["rate"] = c.rate;
+              d["rate_key"] = c.rate_key;
+              d["unit"] = c.unit;
+              d["meaning"] = c.meaning;
+              d["role"] = std::string(to_string(c.role));
+              d["plane"] = c.plane;
+              l.append(d);
+            }
+            return l;
+          },
+          "the coordinates in q order: name, rate, rate_key, unit, meaning, role, plane")
+      .def_property_readonly("position_names",
+                             [](const ModelPtr& mdl) {
+                               std::vector<std::string> n;
+                               for (const auto& c : mdl->coordinates()) n.push_back(c.name);
+                               return n;
+                             })
+      .def_property_readonly("rate_names",
+                             [](const ModelPtr& mdl) {
+                               std::vector<std::string> n;
+                               for (const auto& c : mdl->coordinates()) n.push_back(c.rate);
+                               return n;
+                             })
+      .def_property_readonly("columns",
+                             [](const ModelPtr& mdl) {
+                               std::vector<std::string> n;
+                               for (const auto& c : timeseries_columns(*mdl)) n.push_back(c.name);
+                               return n;
+                             })
       .def(
           "mass_matrix",
-          [](const RotorStatorModel& mdl, const Vec7& q) {
-            Mat7 M;
-            mdl.mass_matrix(q, M);
+          [check_size](const ModelPtr& mdl, const Vec& q) {
+            check_size(mdl, q, "q");
+            Mat M(mdl->num_dofs(), mdl->num_dofs());
+            mdl->mass_matrix(q, M);
             return M;
           },
-          py::arg("q"), "M(q) [7x7]")
+          py::arg("q"), "M(q) [n x n]")
       .def(
           "smooth_forces",
-          [](const RotorStatorModel& mdl, double t, const Vec7& q, const Vec7& v) {
-            Vec7 f;
-            mdl.smooth_forces(t, q, v, f);
+          [check_size](const ModelPtr& mdl, double t, const Vec& q, const Vec& v) {
+            check_size(mdl, q, "q");
+            check_size(mdl, v, "v");
+            Vec f(mdl->num_dofs());
+            mdl->smooth_forces(t, q, v, f);
             return f;
           },
           py::arg("t"), py::arg("q"), py::arg("v"),
           "f(t, q, v): loads, gyroscopic, damping, stiffness, gravity (no contact)")
       .def(
           "smooth_force_jacobians",
-          [](const RotorStatorModel& mdl, double t, const Vec7& q, const Vec7& v) {
-            Mat7 dq, dv;
-            mdl.smooth_force_jacobians(t, q, v, dq, dv);
+          [check_size](const ModelPtr& mdl, double t, const Vec& q, const Vec& v) {
+            check_size(mdl, q, "q");
+            check_size(mdl, v, "v");
+            const int n = mdl->num_dofs();
+            Mat dq(n, n), dv(n, n);
+            mdl->smooth_force_jacobians(t, q, v, dq, dv);
             return py::make_tuple(dq, dv);
           },
           py::arg("t"), py::arg("q"), py::arg("v"), "(df/dq, df/dv)")
       .def(
           "contact",
-          [](const RotorStatorModel& mdl, const Vec7& q, const Vec7& v) {
-            return kinematics_dict(mdl.contact(q, v));
+          [check_size](const ModelPtr& mdl, const Vec& q, const Vec& v, double t, int k) {
+            check_size(mdl, q, "q");
+            check_size(mdl, v, "v");
+            if (k < 0 || k >= mdl->contact_count()) throw py::index_error("no such contact");
+            ContactKinematics c(mdl->num_dofs());
+            mdl->compute_contact(k, t, q, v, c);
+            return kinematics_dict(c);
           },
-          py::arg("q"), py::arg("v"),
-          "dict d_N, W_N, W_T, v_N, v_t, wdot_N, wdot_T, normal_defined (see "
-          "contact_kinematics.hpp)")
-      .def("potential_energy", &RotorStatorModel::potential_energy, py::arg("q"))
-      .def("kinetic_energy", &RotorStatorModel::kinetic_energy, py::arg("q"), py::arg("v"))
-      .def_property_readonly("gap", &RotorStatorModel::gap_scale)
-      .def_property_readonly("mu", [](const RotorStatorModel& mdl) { return mdl.contact_law().mu; })
-      .def_property_readonly("e_n",
-                             [](const RotorStatorModel& mdl) { return mdl.contact_law().e_n; })
-      .def_property_readonly("e_t",
-                             [](const RotorStatorModel& mdl) { return mdl.contact_law().e_t; })
-      .def_property_readonly("spin_coordinate", &RotorStatorModel::spin_coordinate)
-      .def_property_readonly("G", [](const RotorStatorModel& mdl) { return Mat7(mdl.G()); })
-      .def_property_readonly("D", [](const RotorStatorModel& mdl) { return Mat7(mdl.D()); })
-      .def_property_readonly("K", [](const RotorStatorModel& mdl) { return Mat7(mdl.K()); })
-      .def_property_readonly("f_ext",
-                             [](const RotorStatorModel& mdl) { return Vec7(mdl.f_ext()); });
+          py::arg("q"), py::arg("v"), py::arg("t") = 0.0, py::arg("k") = 0,
+          "dict d_N, W_N, W_T, v_N, v_t, b_N, b_T, wdot_N, wdot_T, normal_defined of contact k "
+          "(see contact_kinematics.hpp)")
+      .def(
+          "potential_energy",
+          [check_size](const ModelPtr& mdl, const Vec& q) {
+            check_size(mdl, q, "q");
+            return mdl->potential_energy(q);
+          },
+          py::arg("q"))
+      .def(
+          "kinetic_energy",
+          [check_size](const ModelPtr& mdl, const Vec& q, const Vec& v) {
+            check_size(mdl, q, "q");
+            check_size(mdl, v, "v");
+            return mdl->kinetic_energy(q, v);
+          },
+          py::arg("q"), py::arg("v"))
+      .def(
+          "linearize",
+          [](const ModelPtr& mdl, const std::string& mode) -> py::object {
+            if (mode != "tied" && mode != "free")
+              throw py::value_error("mode must be 'tied' or 'free'");
+            const auto lm =
+                mdl->linearize(mode == "tied" ? Linearization::Tied : Linearization::Free);
+            if (!lm) return py::none();
+            py::dict d;
+            d["names"] = lm->names;
+            d["M"] = lm->M;
+            d["G"] = lm->G;
+            d["D"] = lm->D;
+            d["K"] = lm->K;
+            d["nodes"] = lm->nodes;
+            return d;
+          },
+          py::arg("mode") = "tied",
+          "M x'' + (Omega G + D) x' + K x = 0 about the centred position (dict), or None")
+      .def_property_readonly("contact_count",
+                             [](const ModelPtr& mdl) { return mdl->contact_count(); })
+      .def_property_readonly("gap", [](const ModelPtr& mdl) { return mdl->gap_scale(0); })
+      .def_property_readonly("radius", [](const ModelPtr& mdl) { return mdl->contact_radius(0); })
+      .def_property_readonly("mu", [](const ModelPtr& mdl) { return mdl->contact_law(0).mu; })
+      .def_property_readonly("e_n", [](const ModelPtr& mdl) { return mdl->contact_law(0).e_n; })
+      .def_property_readonly("e_t", [](const ModelPtr& mdl) { return mdl->contact_law(0).e_t; })
+      .def_property_readonly("spin_coordinate",
+                             [](const ModelPtr& mdl) { return mdl->spin_coordinate(); });
 
-  m.attr("DOF_NAMES") = std::vector<std::string>(kDofNames, kDofNames + kNumDofs);
-  m.attr("VEL_NAMES") = std::vector<std::string>(kVelNames, kVelNames + kNumDofs);
+  m.def(
+      "event_fields",
+      [](int contacts) {
+        std::vector<std::string> n;
+        for (const auto& c : event_columns(contacts)) n.push_back(c.name);
+        return n;
+      },
+      py::arg("contacts") = 1, "events.csv's columns (io/columns.hpp)");
   std::vector<std::string> phases;
   for (int i = 0; i < kNumPhases; ++i) phases.emplace_back(to_string(static_cast<Phase>(i)));
   m.attr("PHASE_NAMES") = phases;

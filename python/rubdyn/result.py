@@ -10,11 +10,13 @@ import numpy as np
 # Phase codes of the `phase` column (rubdyn::Phase), in order; the CSV writes the words.
 PHASES = ("free", "slip+", "slip-", "stick")
 
-#: events.csv's columns and their numpy types (kinds and phases are words, as in the CSV).
-EVENT_FIELDS = (("t", "f8"), ("kind", "U10"), ("phase_before", "U6"), ("phase_after", "U6"),
-                ("d_N", "f8"), ("v_N_minus", "f8"), ("v_N_plus", "f8"), ("v_t_minus", "f8"),
-                ("v_t_plus", "f8"), ("P_N", "f8"), ("P_T", "f8"), ("F_N", "f8"), ("F_T", "f8"),
-                ("t_accumulation", "f8"), ("witness", "O"), ("note", "O"))
+from . import _core
+
+#: events.csv's columns (the C++ column table, io/columns.hpp) and their numpy types (kinds and
+#: phases are words, as in the CSV).
+_EVENT_TEXT = {"kind": "U10", "phase_before": "U6", "phase_after": "U6", "witness": "O",
+               "note": "O"}
+EVENT_FIELDS = tuple((name, _EVENT_TEXT.get(name, "f8")) for name in _core.event_fields())
 
 
 def _events_array(columns, n):
@@ -166,7 +168,6 @@ def read(out_dir):
     case = None
     resolved = os.path.join(out_dir, "case.resolved.toml")
     if os.path.exists(resolved):
-        from . import _core
         try:
             case = _core.load_case(resolved, [])
         except _core.CaseError as err:  # written by another version of rubdyn

@@ -221,8 +221,9 @@ def test_model_mechanics_agree_with_a_run():
     res = rubdyn.run(case, t_end=0.03)
     i = int(np.argmax(res.phase != 0))  # a sample in contact
     assert res.phase[i] != 0
-    q = np.array([res[n][i] for n in rubdyn._core.DOF_NAMES])
-    v = np.array([res[n][i] for n in rubdyn._core.VEL_NAMES])
+    assert model.num_dofs == 7 and model.position_names[4] == "theta"
+    q = np.array([res[n][i] for n in model.position_names])
+    v = np.array([res[n][i] for n in model.rate_names])
     M = model.mass_matrix(q)
     assert M.shape == (7, 7) and np.array_equal(M, M.T)
     assert np.all(np.linalg.eigvalsh(M) > 0)

@@ -15,6 +15,7 @@
 
 #include "rubdyn/analysis/campbell.hpp"
 #include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/io/text_files.hpp"
 
 namespace rubdyn {
@@ -87,6 +88,8 @@ struct Uniform {
   std::vector<double> omega;
 };
 Uniform resample(const RunRecord& r, double t0, double t1) {
+  const std::unique_ptr<LagrangianModel> model = build_model(r.spec);
+  const PlaneCoordinates pc = plane_coordinates(model->coordinates(), 0);
   const auto& s = r.samples;
   std::map<long long, long> count;  // spacing histogram in units of 1e-12 s
   for (size_t i = 0; i + 1 < s.size(); ++i) {
@@ -109,8 +112,10 @@ Uniform resample(const RunRecord& r, double t0, double t1) {
     const Sample& a = s[j];
     const Sample& b = s[std::min(j + 1, s.size() - 1)];
     const double w = b.t > a.t ? std::clamp((t - a.t) / (b.t - a.t), 0.0, 1.0) : 0.0;
-    u.z[k] = {a.q[XR] + w * (b.q[XR] - a.q[XR]), a.q[YR] + w * (b.q[YR] - a.q[YR])};
-    u.omega[k] = a.v[TH] + w * (b.v[TH] - a.v[TH]);
+    u.z[k] = {a.q[pc.rotor_x] + w * (b.q[pc.rotor_x] - a.q[pc.rotor_x]),
+              a.q[pc.rotor_y] + w * (b.q[pc.rotor_y] - a.q[pc.rotor_y])};
+    const double wa = model->spin(a.t, a.q, a.v), wb = model->spin(b.t, b.q, b.v);
+    u.omega[k] = wa + w * (wb - wa);
   }
   return u;
 }
@@ -171,16 +176,22 @@ std::string_view to_string(Regime r) {
 }
 
 std::vector<DerivedSample> derive(const RunRecord& r) {
-  const auto& p = r.spec.params;
-  const double g0 = p.stator.gap, R = p.rotor.radius, tau = p.loads.torque;
+  // the model says where the contact plane's centres are and which coordinate spins
+  const std::unique_ptr<LagrangianModel> model = build_model(r.spec);
+  const PlaneCoordinates pc = plane_coordinates(model->coordinates(), 0);
+  const double g0 = model->gap_scale(0), R = model->contact_radius(0), tau = nominal_torque(r.spec);
+  // a stator without coordinates is fixed at the origin
+  auto at = [](const Vec& x, int i) { return i >= 0 ? x[i] : 0.0; };
   std::vector<DerivedSample> out;
   out.reserve(r.samples.size());
   for (const Sample& s : r.samples) {
     DerivedSample d;
     d.t = s.t;
-    d.omega = s.v[TH];
-    const double sx = s.q[XR] - s.q[XS], sy = s.q[YR] - s.q[YS];
-    const double vx = s.v[XR] - s.v[XS], vy = s.v[YR] - s.v[YS];
+    d.omega = model->spin(s.t, s.q, s.v);
+    const double sx = s.q[pc.rotor_x] - at(s.q, pc.stator_x),
+                 sy = s.q[pc.rotor_y] - at(s.q, pc.stator_y);
+    const double vx = s.v[pc.rotor_x] - at(s.v, pc.stator_x),
+                 vy = s.v[pc.rotor_y] - at(s.v, pc.stator_y);
     const double rho2 = sx * sx + sy * sy;
     if (rho2 > 1e-6 * g0 * g0) {
       d.precession = (sx * vy - sy * vx) / rho2;
@@ -190,11 +201,12 @@ std::vector<DerivedSample> derive(const RunRecord& r) {
     } else {
       d.precession = d.precession_ratio = kNaN;
     }
-    d.regime = s.phase == Phase::Free    ? Regime::Free
-               : s.phase == Phase::Stick ? Regime::Rolling
+    const ContactSample& c = s.contacts.front();
+    d.regime = c.phase == Phase::Free    ? Regime::Free
+               : c.phase == Phase::Stick ? Regime::Rolling
                                          : Regime::Sliding;
-    d.dN_over_g0 = s.d_N / g0;
-    d.friction_torque_ratio = tau != 0.0 ? R * s.F_T / tau : kNaN;
+    d.dN_over_g0 = c.d_N / g0;
+    d.friction_torque_ratio = tau != 0.0 ? R * c.F_T / tau : kNaN;
     out.push_back(d);
   }
   return out;
@@ -296,8 +308,18 @@ Spectrogram spectrogram(const RunRecord& r, const AnalysisOptions& o) {
                     o.window, len, u.dt, n));
   }
   const long hop = std::max(1L, std::lround(static_cast<double>(len) * (1.0 - o.overlap)));
-  const CampbellSolver campbell(r.spec.params);
+  const std::unique_ptr<LagrangianModel> model = build_model(r.spec);
+  const std::optional<LinearModel> lm = model->linearize(Linearization::Tied);
+  const std::optional<CampbellSolver> campbell =
+      lm && lm->size() > 0 ? std::optional<CampbellSolver>(CampbellSolver(*lm)) : std::nullopt;
   Spectrogram g;
+  if (campbell) {
+    for (int k = 1; k <= campbell->nodes(); ++k)
+      g.campbell_labels.push_back(fmt::format("f{}f", k));
+    for (int k = 1; k <= campbell->nodes(); ++k)
+      g.campbell_labels.push_back(fmt::format("f{}b", k));
+    g.campbell.assign(g.campbell_labels.size(), {});
+  }
   std::vector<double> amp;
   for (long first = 0; first + len <= n; first += hop) {
     windowed_fft(u.z, first, len, o.pad, u.dt, o.f_max, g.f, amp);
@@ -307,11 +329,15 @@ Spectrogram spectrogram(const RunRecord& r, const AnalysisOptions& o) {
     g.t.push_back(u.t0 + (static_cast<double>(first) + 0.5 * static_cast<double>(len - 1)) * u.dt);
     g.omega.push_back(om);
     g.amplitude.push_back(amp);
-    const CampbellPoint c = campbell.solve(om);
-    g.f1f.push_back(c.f1f);
-    g.f2f.push_back(c.f2f);
-    g.f1b.push_back(-c.f1b);
-    g.f2b.push_back(-c.f2b);
+    if (campbell) {
+      // forward frequencies, then backward ones at negative frequency
+      const CampbellPoint c = campbell->solve(om);
+      const std::size_t nn = c.f_forward.size();
+      for (std::size_t k = 0; k < nn; ++k) {
+        g.campbell[k].push_back(c.f_forward[k]);
+        g.campbell[nn + k].push_back(-c.f_backward[k]);
+      }
+    }
   }
   return g;
 }
@@ -405,10 +431,14 @@ RunVerdicts write_analysis(const RunRecord& r, const AnalysisOptions& o,
       fmt::format_to(out, "{},{},{}\n", sg.t[i], sg.f[k], sg.amplitude[i][k]);
   write_file_atomic((fs::path(dir) / "spectrogram.csv").string(), fmt::to_string(b));
   b.clear();
-  fmt::format_to(out, "t,omega,f1f,f2f,f1b,f2b\n");
-  for (size_t i = 0; i < sg.t.size(); ++i)
-    fmt::format_to(out, "{},{},{},{},{},{}\n", sg.t[i], sg.omega[i], sg.f1f[i], sg.f2f[i],
-                   sg.f1b[i], sg.f2b[i]);
+  fmt::format_to(out, "t,omega");
+  for (const auto& l : sg.campbell_labels) fmt::format_to(out, ",{}", l);
+  fmt::format_to(out, "\n");
+  for (size_t i = 0; i < sg.t.size(); ++i) {
+    fmt::format_to(out, "{},{}", sg.t[i], sg.omega[i]);
+    for (const auto& col : sg.campbell) fmt::format_to(out, ",{}", col[i]);
+    fmt::format_to(out, "\n");
+  }
   write_file_atomic((fs::path(dir) / "campbell.csv").string(), fmt::to_string(b));
   std::string json = verdicts_json(v);
   json.insert(json.size() - 3, fmt::format(",\n  \"spectrogram\": \"{}\"",

@@ -24,6 +24,7 @@
 #include "rubdyn/core/demand.hpp"
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/io/output_folder.hpp"
 #include "rubdyn/io/output_reader.hpp"
 #include "rubdyn/io/simulate.hpp"
@@ -197,10 +198,15 @@ CaseSpec ensemble_member(const CaseSpec& point, int k, const EnsembleOptions& e)
   // the operations in the documented order (sweep.hpp), so that the doubles can be recomputed
   const double dw = n > 1 ? e.domega * (2.0 * (k - 1) / (n - 1) - 1.0) : e.domega;
   const double a = 2.0 * std::numbers::pi * (k - 1) / n;
+  // the spin speed and the rotor centre in the (first) contact plane, as the model names them
+  const auto coords = build_model(point)->coordinates();
+  const int spin = find_coordinate(coords, CoordinateRole::Spin);
+  const PlaneCoordinates pc = plane_coordinates(coords, 0);
+  RUBDYN_DEMAND(spin >= 0 && pc.rotor_x >= 0 && pc.rotor_y >= 0);
   CaseSpec m = point;
-  m.initial.v0[TH] = point.initial.v0[TH] + dw;
-  m.initial.q0[XR] = point.initial.q0[XR] + e.offset * std::cos(a);
-  m.initial.q0[YR] = point.initial.q0[YR] + e.offset * std::sin(a);
+  m.initial.v0[spin] = point.initial.v0[spin] + dw;
+  m.initial.q0[pc.rotor_x] = point.initial.q0[pc.rotor_x] + e.offset * std::cos(a);
+  m.initial.q0[pc.rotor_y] = point.initial.q0[pc.rotor_y] + e.offset * std::sin(a);
   return m;
 }
 
@@ -374,14 +380,20 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
   if (members > 0) {  // the offset must leave every point's rotor inside its clearance
     long over = 0;
     size_t first = 0;
-    for (size_t i = 0; i < specs.size(); ++i)
-      if (!(o.ensemble.offset < specs[i].params.stator.gap) && over++ == 0) first = i;
+    double first_gap = 0.0;
+    for (size_t i = 0; i < specs.size(); ++i) {
+      const double g0 = build_model(specs[i])->gap_scale(0);
+      if (!(o.ensemble.offset < g0) && over++ == 0) {
+        first = i;
+        first_gap = g0;
+      }
+    }
     if (over > 0)
       throw std::invalid_argument(fmt::format(
           "invalid sweep:\n  --ensemble-offset {}: must be < stator.gap = {} m (the rotor is "
           "released that far off its position, inside the clearance); broken at {} point{} "
           "(first: point {})",
-          o.ensemble.offset, specs[first].params.stator.gap, over, over == 1 ? "" : "s", first));
+          o.ensemble.offset, first_gap, over, over == 1 ? "" : "s", first));
   }
   std::vector<size_t> mine;
   for (size_t i = 0; i < all.size(); ++i)

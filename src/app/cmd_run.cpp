@@ -20,6 +20,7 @@
 #include "rubdyn/core/report.hpp"
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/io/output_folder.hpp"
 #include "rubdyn/io/simulate.hpp"
 #include "rubdyn/io/solver_registry.hpp"
@@ -75,9 +76,12 @@ std::vector<std::string> restart_overrides(const std::string& from,
                  from.c_str(), s->t);
   }
   std::vector<std::string> sets = {fmt::format("run.t_start={}", s->t)};
-  for (int i = 0; i < kNumDofs; ++i) {
-    sets.push_back(fmt::format("initial.{}={}", kDofNames[i], s->q[i]));
-    sets.push_back(fmt::format("initial.{}={}", i == TH ? "omega0" : kVelNames[i], s->v[i]));
+  // every coordinate and its rate, under the model's initial-state keys
+  const auto coords = build_model(r.spec)->coordinates();
+  for (std::size_t i = 0; i < coords.size(); ++i) {
+    const auto k = static_cast<Eigen::Index>(i);
+    sets.push_back(fmt::format("initial.{}={}", coords[i].name, s->q[k]));
+    sets.push_back(fmt::format("initial.{}={}", coords[i].rate_key, s->v[k]));
   }
   return sets;
 }
@@ -167,7 +171,7 @@ int run_command(const RunArgs& a) {
   // A fixed-step scheme with too large a step can end far inside the stator and still
   // "complete": say so. A tenth of the clearance: beyond it the contact normal and the gap of
   // the scheme's state no longer describe the same geometry (mj at h = 5e-3 reached 79 g0).
-  const double g0 = spec.params.stator.gap;
+  const double g0 = build_model(spec)->gap_scale(0);
   if (summary.max_penetration > 0.1 * g0) {
     std::fprintf(stderr,
                  "rubdyn run: warning: the largest penetration, %.3g m, is %.3g times the "

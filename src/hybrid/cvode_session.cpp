@@ -145,6 +145,7 @@ struct CvodeSession::Impl {
   int n = 0;
   SUNContext ctx = nullptr;
   N_Vector y = nullptr;
+  N_Vector out = nullptr;  // an empty vector that wraps the caller's array in dky()
   SUNMatrix A = nullptr;
   SUNLinearSolver LS = nullptr;
   SUNNonlinearSolver NLS = nullptr;
@@ -157,6 +158,7 @@ struct CvodeSession::Impl {
   CvodeStats acc;  // counters of previous restarts
   bool started = false;
   int n_roots = 0;
+  std::vector<int> root_dirs;  // CVodeSetRootDirection's argument (it takes a non-const array)
   /// The last message CVODES reported (error or warning), without its "[CVODES ERROR]"
   /// framing. CVODES prints nothing itself: its messages become part of the typed result.
   std::string message;
@@ -226,6 +228,7 @@ struct CvodeSession::Impl {
     if (LS) SUNLinSolFree(LS);
     if (NLS) SUNNonlinSolFree(NLS);
     if (A) SUNMatDestroy(A);
+    if (out) N_VDestroy(out);
     if (y) N_VDestroy(y);
     if (ctx) SUNContext_Free(&ctx);
   }
@@ -241,8 +244,11 @@ CvodeSession::CvodeSession(const CvodeConfig& cfg, const CvodeCallbacks& cb)
   I.atol.assign(cfg.atol, cfg.atol + n);
   check(SUNContext_Create(nullptr, &I.ctx), "SUNContext_Create");
   I.y = N_VNew_Serial(n, I.ctx);
+  if (!I.y) throw std::runtime_error("CVODE: N_VNew_Serial failed (out of memory)");
   small::install(I.y);
   N_VConst(0.0, I.y);
+  I.out = N_VNewEmpty_Serial(n, I.ctx);
+  if (!I.out) throw std::runtime_error("CVODE: N_VNewEmpty_Serial failed (out of memory)");
   I.mem = CVodeCreate(cfg.method == CvodeMethod::BDF ? CV_BDF : CV_ADAMS, I.ctx);
   if (!I.mem) throw std::runtime_error("CVODE: CVodeCreate failed");
   check(CVodeSetErrHandlerFn(I.mem, &Impl::on_message, &I), "CVodeSetErrHandlerFn");
@@ -256,7 +262,9 @@ CvodeSession::CvodeSession(const CvodeConfig& cfg, const CvodeCallbacks& cb)
     check(CVodeSetNonlinearSolver(I.mem, I.NLS), "CVodeSetNonlinearSolver");
   } else {
     I.A = SUNDenseMatrix(n, n, I.ctx);
+    if (!I.A) throw std::runtime_error("CVODE: SUNDenseMatrix failed (out of memory)");
     I.LS = SUNLinSol_Dense(I.y, I.A, I.ctx);
+    if (!I.LS) throw std::runtime_error("CVODE: SUNLinSol_Dense failed");
     check(CVodeSetLinearSolver(I.mem, I.LS, I.A), "CVodeSetLinearSolver");
     if (cb.jac) check(CVodeSetJacFn(I.mem, &Impl::jac), "CVodeSetJacFn");
   }
@@ -288,9 +296,8 @@ void CvodeSession::set_roots(int n_roots, const int* directions) {
   auto& I = *impl_;
   check(CVodeRootInit(I.mem, n_roots, n_roots > 0 ? &Impl::roots : nullptr), "CVodeRootInit");
   if (n_roots > 0) {
-    int dirs[16];
-    for (int i = 0; i < n_roots && i < 16; ++i) dirs[i] = directions[i];
-    check(CVodeSetRootDirection(I.mem, dirs), "CVodeSetRootDirection");
+    I.root_dirs.assign(directions, directions + n_roots);
+    check(CVodeSetRootDirection(I.mem, I.root_dirs.data()), "CVodeSetRootDirection");
     // CVODE warns when a witness is zero at t0 and keeps it inactive until it moves away:
     // that is the half-open interval rule we rely on; the warning itself is not useful.
     check(CVodeSetNoInactiveRootWarn(I.mem), "CVodeSetNoInactiveRootWarn");
@@ -357,9 +364,8 @@ void CvodeSession::dky(double t, int k, double* out) const {
     std::memcpy(out, I.y0.data(), sizeof(double) * I.n);
     return;
   }
-  N_Vector v = N_VMake_Serial(I.n, out, I.ctx);
-  const int flag = CVodeGetDky(I.mem, t, k, v);
-  N_VDestroy(v);
+  N_VSetArrayPointer(out, I.out);  // the caller's array, wrapped without allocating
+  const int flag = CVodeGetDky(I.mem, t, k, I.out);
   if (flag < 0) {
     throw std::runtime_error("CVODE: CVodeGetDky failed: " + flag_name(flag) +
                              (I.message.empty() ? "" : " (" + I.message + ")"));

@@ -34,11 +34,12 @@ class Integrator {
  public:
   Integrator(const LagrangianModel& m, const EventDrivenOptions& opt, OutputSink& sink)
       : m_(m),
+        n_(m.num_dofs()),
         opt_(opt),
         sink_(sink),
-        law_(m.contact_law()),
+        law_(m.contact_law(0)),
         mon_(law_.mu, opt.omega_lim),
-        g0_(m.gap_scale()),
+        g0_(m.gap_scale(0)),
         atol_v_(opt.atol * 1e3),
         v_tol_(10.0 * atol_v_),
         // positions are resolved to about atol + rtol |q| with |q| ~ the gap scale near contact
@@ -48,7 +49,17 @@ class Integrator {
         // orbit is (measured: 1e-8 on a unit amplitude at rtol 1e-10); logging a near-miss
         // changes nothing in the motion, since at a minimum of free flight d_N'' >= 0.
         sw_(m, SwitchTolerances{v_tol_, graze_tol_, std::max(graze_tol_, 1e-6 * g0_), g0_}),
-        guard_(opt.max_events_per_second) {
+        guard_(opt.max_events_per_second),
+        sample_(n_, 1),
+        op_(n_),
+        dyn_(n_),
+        kin_(n_),
+        q_restart_(Vec::Zero(n_)),
+        v_restart_(Vec::Zero(n_)),
+        q_tmp_(Vec::Zero(n_)),
+        v_tmp_(Vec::Zero(n_)),
+        q_ev_(Vec::Zero(n_)),
+        v_ev_(Vec::Zero(n_)) {
     wit_.g0 = g0_;
     wit_.v_ref = std::max(1e3 * g0_, 1e-300);
     wit_.omega_lim = opt.omega_lim;
@@ -118,11 +129,16 @@ class Integrator {
 
   /// Starts (or restarts) the current phase at (t, q, v). In minimal coordinates the state is
   /// mapped into the chart of the phase; the restart state is its embedding (equal to round-off).
-  void start_phase(double t, Vec7 q, Vec7 v) {
+  void start_phase(double t, const Vec& q, const Vec& v) {
     phase_start_ = t;
     build_witnesses();
     PhaseSystem* s = system_for(phase_);
-    s->enter(phase_, q, v);
+    // (q, v may alias q_restart_, v_restart_: the embedding is computed from a copy)
+    if (&q != &q_restart_) q_restart_ = q;
+    if (&v != &v_restart_) v_restart_ = v;
+    s->enter(phase_, q_restart_, v_restart_);
+    const Vec& qs = q_restart_;
+    const Vec& vs = v_restart_;
     // F_ref: the scale of the contact forces since the contact closed (witness scaling and the
     // decision band at contact witnesses); a phase that starts with a vanishing force, e.g. slip
     // at the instant stick ends with F_N -> 0, keeps the scale of the contact.
@@ -130,12 +146,10 @@ class Integrator {
       wit_.F_ref = 0.0;
     } else {
       double FN = 0, FT = 0;
-      s->forces(t, q, v, FN, FT);
+      s->forces(t, qs, vs, FN, FT);
       wit_.F_ref = std::max({wit_.F_ref, std::abs(FN), 1e-6});
     }
     t_restart_ = t;
-    q_restart_ = q;
-    v_restart_ = v;
     cur_ = s;
     s->restart(t, work_, t_end_);
   }
@@ -144,8 +158,9 @@ class Integrator {
   /// gap is clearly opening (v_N above the velocity tolerance; until then a closing gap is still
   /// seen by the d_N witness, and only a touch-and-go without any crossing could pass unlogged),
   /// contact onset at d_N = 0 once the gap is above the position tolerance.
-  void arm(const Vec7& q, const Vec7& v) {
-    const ContactKinematics c = m_.contact(q, v);
+  void arm(double t, const Vec& q, const Vec& v) {
+    m_.compute_contact(0, t, q, v, kin_);
+    const ContactKinematics& c = kin_;
     const bool rate = gap_rate_deferred_ && c.v_N > v_tol_;
     const bool gap = gap_banded_ && c.d_N > graze_tol_;
     if (!rate && !gap) return;
@@ -164,27 +179,28 @@ class Integrator {
   void end_phase(double t) { sum_.phase_time[static_cast<int>(phase_)] += t - phase_start_; }
 
   // ---- output ----
-  void emit_sample(double t, const Vec7& q, const Vec7& v) {
-    Sample s;
+  void emit_sample(double t, const Vec& q, const Vec& v) {
+    Sample& s = sample_;
     s.t = t;
     s.q = q;
     s.v = v;
+    ContactSample& cs = s.contacts[0];
+    cs.F_N = cs.F_T = 0.0;
     // Dense output inside a contact phase of the DAE formulation is CVODE's interpolant, which
     // is not projected: it is projected like a step end (contact_point), so that every output
     // state satisfies the constraints.
     if (phase_ != Phase::Free) {
-      ContactOperators op;
-      cur_->contact_point(t, s.q, s.v, op);
-      const PhaseDynamics d = phase_dynamics(op, phase_, law_.mu);
-      s.F_N = d.F_N;
-      s.F_T = d.F_T;
+      cur_->contact_point(t, s.q, s.v, op_);
+      phase_dynamics(op_, phase_, law_.mu, dyn_);
+      cs.F_N = dyn_.F_N;
+      cs.F_T = dyn_.F_T;
     }
-    const ContactKinematics c = m_.contact(s.q, s.v);
-    s.d_N = c.d_N;
-    s.v_N = c.v_N;
-    s.v_t = c.v_t;
-    s.phase = phase_;
-    mon_.observe(t, m_.spin(s.v), s.d_N, s.v_N, s.F_N, s.F_T, phase_ != Phase::Free);
+    m_.compute_contact(0, t, s.q, s.v, kin_);
+    cs.d_N = kin_.d_N;
+    cs.v_N = kin_.v_N;
+    cs.v_t = kin_.v_t;
+    cs.phase = phase_;
+    mon_.observe(t, m_.spin(t, s.q, s.v), cs.d_N, cs.v_N, cs.F_N, cs.F_T, phase_ != Phase::Free);
     sink_.sample(s);
   }
 
@@ -193,9 +209,8 @@ class Integrator {
   /// before it (single-step mode while the gap-rate witness is armed).
   void emit_outputs_before(double t) {
     while (next_out_ < t && next_out_ < t_end_) {
-      Vec7 q, v;
-      cur_->interpolate(next_out_, q, v);
-      emit_sample(next_out_, q, v);
+      cur_->interpolate(next_out_, q_tmp_, v_tmp_);
+      emit_sample(next_out_, q_tmp_, v_tmp_);
       next_out_ = t_init_ + static_cast<double>(++k_out_) * opt_.output_dt;
     }
   }
@@ -236,11 +251,10 @@ class Integrator {
 
   /// The localised time of a witness's event in the current step (event_locator.hpp), and the
   /// interpolated state there. `hi`: the root finder's time (or the gap minimum's).
-  double locate(Witness w, double hi, Vec7& q, Vec7& v) const {
+  double locate(Witness w, double hi, Vec& q, Vec& v) {
     auto g = [&](double t) {
-      Vec7 qi, vi;
-      cur_->interpolate(t, qi, vi);
-      return cur_->witness_value(w, t, qi, vi);
+      cur_->interpolate(t, q_tmp_, v_tmp_);
+      return cur_->witness_value(w, t, q_tmp_, v_tmp_);
     };
     const double lo = cur_->step_start();
     const double t = last_time_with_sign(lo, hi, g(lo), g(hi), g);
@@ -253,11 +267,11 @@ class Integrator {
   /// the zero of d_N itself is still taken when the step holds it, so a slow re-contact is not
   /// dated by the band; only a crossing in an earlier step (inside the band, below what the
   /// integrator resolves) is dated by the band's witness.
-  double locate_onset(double hi, Vec7& q, Vec7& v) const {
+  double locate_onset(double hi, Vec& q, Vec& v) {
     auto gap = [&](double t) {
-      Vec7 qi, vi;
-      cur_->interpolate(t, qi, vi);
-      return m_.contact(qi, vi).d_N;
+      cur_->interpolate(t, q_tmp_, v_tmp_);
+      m_.compute_contact(0, t, q_tmp_, v_tmp_, kin_);
+      return kin_.d_N;
     };
     const double lo = cur_->step_start();
     const double g_lo = gap(lo);
@@ -270,8 +284,9 @@ class Integrator {
   }
 
   /// Contact onset at t (free flight, q about to reach d_N = 0).
-  bool arrive(double t, Vec7 q, const Vec7& v, const char* witness) {
-    sw_.project_position(q, v);
+  bool arrive(double t, const Vec& q_in, const Vec& v, const char* witness) {
+    Vec q = q_in;
+    sw_.project_position(t, q, v);
     emit_sample(t, q, v);
     EventRecord e;
     e.t = t;
@@ -284,7 +299,7 @@ class Integrator {
     return apply(t, tr);
   }
 
-  bool on_gap_minimum(double t, const Vec7& q, const Vec7& v, bool& restarted) {
+  bool on_gap_minimum(double t, const Vec& q, const Vec& v, bool& restarted) {
     if (t - phase_start_ <= 1e-12 * std::max(1.0, std::abs(t))) {
       // Half-open interval rule: right after a release on the constraint (v_N = 0, and the
       // free normal acceleration ~ 0 at a lift-off) the gap rate may dip by round-off and come
@@ -305,21 +320,21 @@ class Integrator {
       case ModeSwitcher::GapMinimum::Crossed: {
         // the gap closed and reopened inside the step: back to its first crossing
         restarted = true;
-        Vec7 qc, vc;
-        const double tc = locate_onset(t, qc, vc);
+        const double tc = locate_onset(t, q_ev_, v_ev_);
         close_phase(tc);
-        return arrive(tc, qc, vc, "v_N (gap minimum below 0: double crossing inside a step)");
+        return arrive(tc, q_ev_, v_ev_, "v_N (gap minimum below 0: double crossing inside a step)");
       }
     }
     return true;
   }
 
   bool on_contact_witness(Witness w, double t_root) {
-    Vec7 q, v;
+    Vec& q = q_ev_;
+    Vec& v = v_ev_;
     const double t = locate(w, t_root, q, v);
     close_phase(t);
     emit_sample(t, q, v);
-    const ContactKinematics c = m_.contact(q, v);
+    const ContactKinematics c = m_.contact(0, t, q, v);
     EventRecord e;
     e.t = t;
     e.phase_before = phase_;
@@ -335,7 +350,7 @@ class Integrator {
   }
 
   /// One fired witness at t (the root finder's time, state (q, v)).
-  bool on_root(Witness w, double t, const Vec7& q, const Vec7& v, bool& restarted) {
+  bool on_root(Witness w, double t, const Vec& q, const Vec& v, bool& restarted) {
     if (w == Witness::Omega) {
       mon_.set_omega_lim_time(t);
       omega_pending_ = false;
@@ -344,18 +359,17 @@ class Integrator {
     if (phase_ == Phase::Free && w == Witness::GapRate) return on_gap_minimum(t, q, v, restarted);
     restarted = true;
     if (phase_ != Phase::Free) return on_contact_witness(w, t);
-    Vec7 qc, vc;
-    const double tc = locate_onset(t, qc, vc);
+    const double tc = locate_onset(t, q_ev_, v_ev_);
     close_phase(tc);
-    return arrive(tc, qc, vc, "d_N");
+    return arrive(tc, q_ev_, v_ev_, "d_N");
   }
 
   /// The initial phase: free unless the state is on the constraint.
   bool start(const MechanicalState& init) {
-    const Vec7& q = init.q;
-    const Vec7& v = init.v;
+    const Vec& q = init.q;
+    const Vec& v = init.v;
     const double t = init.t;
-    const ContactKinematics c0 = m_.contact(q, v);
+    const ContactKinematics c0 = m_.contact(0, t, q, v);
     phase_ = Phase::Free;
     phase_start_ = t;
     if (c0.d_N < -graze_tol_) {
@@ -379,6 +393,7 @@ class Integrator {
   }
 
   const LagrangianModel& m_;
+  const int n_;
   const EventDrivenOptions& opt_;
   OutputSink& sink_;
   const ContactLaw law_;
@@ -397,7 +412,14 @@ class Integrator {
   bool gap_banded_ = false;         // ... and contact onset at d_N = -graze_tol
   bool band_next_release_ = false;  // set by an arrival released at once (build_witnesses)
   double t_end_ = 0, phase_start_ = 0, t_restart_ = 0;
-  Vec7 q_restart_ = Vec7::Zero(), v_restart_ = Vec7::Zero();
+  // workspaces, sized for the model when the integrator is built
+  Sample sample_;
+  ContactOperators op_;
+  PhaseDynamics dyn_;
+  ContactKinematics kin_;
+  Vec q_restart_, v_restart_;         // where the current phase (re)started
+  Vec q_tmp_, v_tmp_;                 // interpolated states (outputs, the localisers)
+  Vec q_ev_, v_ev_;                   // the state at an event
   double t_init_ = 0, next_out_ = 0;  // output grid t_init_ + k output_dt, next time to write
   long k_out_ = 1;
   Works work_{};
@@ -418,7 +440,7 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
   sum_.t_end_requested = t_end;
   sum_.energy_initial = m_.kinetic_energy(init.q, init.v) + m_.potential_energy(init.q);
   double t = init.t;
-  Vec7 q = init.q, v = init.v;
+  Vec q = init.q, v = init.v;
   t_init_ = init.t;
   next_out_ = init.t + opt_.output_dt;
   bool ok = true;
@@ -429,7 +451,7 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
   bool root_without_restart = false;
   int recoveries = 0;
   double t_root = 0.0;
-  Vec7 q_root, v_root;
+  Vec q_root = q, v_root = v;
   Works work_root{};
   std::vector<int> info;
   try {
@@ -475,14 +497,14 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
         fail(Termination::NonFinite, fmt::format("non-finite state at t = {:.17g}", t));
         break;
       }
-      if (arming && st != Status::Root) arm(q, v);
+      if (arming && st != Status::Root) arm(t, q, v);
       if (st != Status::Root) root_without_restart = false;
       if (st == Status::Step) continue;
       if (st == Status::Reached) {
         emit_sample(t, q, v);
         if (opt_.progress)
-          opt_.progress(t, std::accumulate(sum_.events.begin(), sum_.events.end(), 0L), m_.spin(v),
-                        phase_);
+          opt_.progress(t, std::accumulate(sum_.events.begin(), sum_.events.end(), 0L),
+                        m_.spin(t, q, v), phase_);
         if (opt_.stop && t < t_end_ && opt_.stop->load(std::memory_order_relaxed)) {
           fail(Termination::Interrupted, fmt::format("interrupted at t = {:.17g}", t));
           break;

@@ -7,15 +7,15 @@
 namespace rubdyn::detail {
 
 ModeSwitcher::ModeSwitcher(const LagrangianModel& m, const SwitchTolerances& tol)
-    : m_(m), law_(m.contact_law()), tol_(tol) {}
+    : m_(m), law_(m.contact_law(0)), tol_(tol) {}
 
-void ModeSwitcher::project_position(Vec7& q, const Vec7& v) const {
-  rubdyn::project_position(m_, q, v, 1e-14 * tol_.g0);
+void ModeSwitcher::project_position(double t, VecOut q, VecIn v) const {
+  ContactKinematics c(m_.num_dofs());
+  rubdyn::project_position(m_, t, q, v, 1e-14 * tol_.g0, c);
 }
 
-Transition ModeSwitcher::gap_closed(double t, const Vec7& q, const Vec7& v_minus,
-                                    EventRecord e) const {
-  ContactOperators op;
+Transition ModeSwitcher::gap_closed(double t, VecIn q, VecIn v_minus, EventRecord e) const {
+  ContactOperators op(m_.num_dofs());
   compute_contact_operators(m_, t, q, v_minus, op);
   e.d_N = op.c.d_N;
   e.v_N_minus = op.c.v_N;
@@ -37,13 +37,13 @@ Transition ModeSwitcher::gap_closed(double t, const Vec7& q, const Vec7& v_minus
     tr.message = fmt::format("at t = {:.17g}: {}", t, e.note);
     return tr;
   }
-  Vec7 v_plus = r.v_plus;
+  Vec v_plus = r.v_plus;
   e.P_N = r.P_N;
   e.P_T = r.P_T;
   e.note = r.sticking ? "sticking impulse" : "sliding impulse";
   if (r.nonunique) e.note += "; several impulses solve the impact (tie rule applied)";
   const double T_minus = m_.kinetic_energy(q, v_minus);
-  ContactOperators opp;
+  ContactOperators opp(m_.num_dofs());
   compute_contact_operators(m_, t, q, v_plus, opp);
   if (law_.has_restitution() && opp.c.v_N > tol_.v_tol) {
     // Accumulation (Zeno): the next bounce rises h = v_N+^2 / (2 |b_N|) under the free normal
@@ -87,13 +87,13 @@ Transition ModeSwitcher::gap_closed(double t, const Vec7& q, const Vec7& v_minus
   return tr;
 }
 
-Transition ModeSwitcher::on_constraint(double t, const Vec7& q_in, const Vec7& v_in, EventRecord e,
+Transition ModeSwitcher::on_constraint(double t, VecIn q_in, VecIn v_in, EventRecord e,
                                        double rel_tol, bool at_slip_zero,
                                        std::optional<Phase> ending, double F_ref) const {
   Transition tr;
-  Vec7 q = q_in, v = v_in;
-  project_position(q, v);
-  ContactOperators op;
+  Vec q = q_in, v = v_in;
+  project_position(t, q, v);
+  ContactOperators op(m_.num_dofs());
   compute_contact_operators(m_, t, q, v, op);
   const double T_before = m_.kinetic_energy(q, v);
   const bool near_stick = law_.has_friction() && (at_slip_zero || std::abs(op.c.v_t) <= tol_.v_tol);
@@ -135,20 +135,18 @@ Transition ModeSwitcher::on_constraint(double t, const Vec7& q_in, const Vec7& v
   return tr;
 }
 
-ModeSwitcher::GapMinimum ModeSwitcher::classify_gap_minimum(double t, const Vec7& q,
-                                                            const Vec7& v) const {
-  const ContactKinematics c = m_.contact(q, v);
+ModeSwitcher::GapMinimum ModeSwitcher::classify_gap_minimum(double t, VecIn q, VecIn v) const {
+  const ContactKinematics c = m_.contact(0, t, q, v);
   if (c.d_N > tol_.graze_band) return GapMinimum::Clear;
   if (c.d_N < -tol_.graze_tol) return GapMinimum::Crossed;
   if (c.d_N > tol_.graze_tol) return GapMinimum::TouchAndGo;
-  ContactOperators op;
+  ContactOperators op(m_.num_dofs());
   compute_contact_operators(m_, t, q, v, op);
   return op.b_N >= 0.0 ? GapMinimum::TouchAndGo : GapMinimum::Grazing;
 }
 
-EventRecord ModeSwitcher::grazing_record(double t, const Vec7& q, const Vec7& v,
-                                         bool touch_and_go) const {
-  const ContactKinematics c = m_.contact(q, v);
+EventRecord ModeSwitcher::grazing_record(double t, VecIn q, VecIn v, bool touch_and_go) const {
+  const ContactKinematics c = m_.contact(0, t, q, v);
   EventRecord e;
   e.t = t;
   e.kind = EventKind::Grazing;

@@ -31,8 +31,8 @@ struct Transition {
   Termination why = Termination::Completed;
   std::string message;
   Phase next = Phase::Free;
-  Vec7 q = Vec7::Zero(), v = Vec7::Zero();  ///< the state the next phase starts from
-  std::array<EventRecord, 2> events;        ///< to log, in order
+  Vec q, v;                           ///< the state the next phase starts from
+  std::array<EventRecord, 2> events;  ///< to log, in order
   int n_events = 0;
   double impulse_work = 0.0;  ///< kinetic energy change by impulses and velocity projections
   bool release = false;       ///< free flight starting on the constraint with v_N = 0
@@ -45,18 +45,18 @@ class ModeSwitcher {
 
   /// Puts q on d_N = 0 (to 1e-14 g0: 100x below the drift bound we promise, 1e-12 g0, and 1e6x
   /// above round-off).
-  void project_position(Vec7& q, const Vec7& v) const;
+  void project_position(double t, VecOut q, VecIn v) const;
 
   /// The gap closed at t with (q on d_N = 0, v-). Impact when v_N < -v_tol, then the contact
   /// problem decides (unless the impact is a bounce). `e` carries the event's time, phase and
   /// witness.
-  Transition gap_closed(double t, const Vec7& q, const Vec7& v, EventRecord e) const;
+  Transition gap_closed(double t, VecIn q, VecIn v, EventRecord e) const;
 
   /// On the constraint (q on d_N = 0): v_N set to 0 exactly (v_t too when at_slip_zero or
   /// |v_t| <= v_tol, with friction), then select_mode with the relative band rel_tol and the
   /// ending phase excluded (force scale F_ref). With `ending`, the event's kind is set from the
   /// decision: liftoff, stick, slip (stick -> slip) or reversal (slip -> the other slip).
-  Transition on_constraint(double t, const Vec7& q, const Vec7& v, EventRecord e, double rel_tol,
+  Transition on_constraint(double t, VecIn q, VecIn v, EventRecord e, double rel_tol,
                            bool at_slip_zero = false, std::optional<Phase> ending = std::nullopt,
                            double F_ref = 0.0) const;
 
@@ -66,9 +66,9 @@ class ModeSwitcher {
     Grazing,     ///< touching with the gap closing at acceleration level: contact problem
     Crossed      ///< below 0: the gap closed and reopened inside the step
   };
-  GapMinimum classify_gap_minimum(double t, const Vec7& q, const Vec7& v) const;
+  GapMinimum classify_gap_minimum(double t, VecIn q, VecIn v) const;
   /// The grazing event record of a gap minimum (TouchAndGo: phase_after Free and its note).
-  EventRecord grazing_record(double t, const Vec7& q, const Vec7& v, bool touch_and_go) const;
+  EventRecord grazing_record(double t, VecIn q, VecIn v, bool touch_and_go) const;
 
  private:
   const LagrangianModel& m_;

@@ -9,11 +9,15 @@
 //                     v_t = 0 in stick, mass-weighted)
 //   ReducedContact    slip (phi free) or stick (phi tied to theta) in the model's chart
 //                     (contact_chart.hpp): the constraints hold by construction
-// A session state is the mechanical part (n() components: (q, v) or (p, p')) followed by the
-// kNw works of the applied loads, the dampers and friction, integrated with the state and
+// A session state is the mechanical part (size(): (q, v) or (p, p')) followed by the kNw works
+// of the applied loads, the dampers and friction, integrated with the state and
 // error-controlled like it (as CVODES quadratures they cost a second Nordsieck array: measured
 // 30 % of the run time in the rolling regime).
 // The witnesses of the running phase are evaluated here, on the phase's own state.
+// Every buffer is sized for the model when the object is built: the right-hand sides, the
+// witnesses and the interpolation allocate nothing. Each callback has its own scratch (the
+// right-hand side, the witnesses, the integrator's queries), so that none overwrites another's.
+#include <Eigen/Cholesky>
 #include <array>
 #include <memory>
 #include <vector>
@@ -24,10 +28,7 @@
 
 namespace rubdyn::detail {
 
-constexpr int kN = 2 * kNumDofs;  // full state y = (q, v)
-constexpr int kNw = 3;            // works: applied loads, dampers, friction
-constexpr int kNy = kN + kNw;     // largest session state
-using SessionState = std::array<double, kNy>;
+constexpr int kNw = 3;  // works: applied loads, dampers, friction
 using Works = std::array<double, kNw>;
 
 /// What ends a phase (event_driven.hpp lists them per phase).
@@ -63,6 +64,14 @@ struct SessionSettings {
   long max_steps = 10'000'000;
 };
 
+/// Scratch for one evaluation of a contact phase at a full state.
+struct ContactScratch {
+  explicit ContactScratch(int n) : q(Vec::Zero(n)), v(Vec::Zero(n)), op(n), dyn(n) {}
+  Vec q, v;
+  ContactOperators op;
+  PhaseDynamics dyn;
+};
+
 class PhaseSystem {
  public:
   PhaseSystem(const LagrangianModel& m, const WitnessSet& w);
@@ -72,11 +81,11 @@ class PhaseSystem {
 
   /// Maps the full state (q, v) of `phase` into the session state; (q, v) becomes the state
   /// the session will start from (an embedding: equal to the input to round-off).
-  void enter(Phase phase, Vec7& q, Vec7& v);
+  void enter(Phase phase, Vec& q, Vec& v);
   /// (Re)starts the session at t from the entered state with the works w and the witnesses.
   void restart(double t, const Works& w, double t_stop);
   /// Advances the session (CvodeSession::advance) and returns the full state at t.
-  CvodeSession::Status advance(double tout, double& t, Vec7& q, Vec7& v, bool one_step);
+  CvodeSession::Status advance(double tout, double& t, Vec& q, Vec& v, bool one_step);
 
   Phase phase() const { return phase_; }
   CvodeSession& session() { return *session_; }
@@ -85,42 +94,47 @@ class PhaseSystem {
   double step_start() const { return session_->current_time() - session_->last_step(); }
 
   /// The full state interpolated at t inside the last step.
-  void interpolate(double t, Vec7& q, Vec7& v) const;
+  void interpolate(double t, Vec& q, Vec& v) const;
   /// Works at the last state returned by advance, or interpolated at t in the last step.
   Works works() const;
   Works works_at(double t) const;
 
-  /// Contact operators of a contact phase at a full state of it. The DAE formulation first
-  /// projects the state onto the constraints (its interpolant between step ends is not
-  /// projected); the others are on them by construction.
-  virtual void contact_point(double t, Vec7& q, Vec7& v, ContactOperators& op) const;
+  /// Contact operators of a contact phase at a full state of it (q, v may be changed: the DAE
+  /// formulation first projects the state onto the constraints, its interpolant between step
+  /// ends is not projected; the others are on them by construction).
+  virtual void contact_point(double t, Vec& q, Vec& v, ContactOperators& op) const;
   /// Contact forces of the phase at a full state of it (0 in free flight).
-  void forces(double t, Vec7 q, Vec7 v, double& F_N, double& F_T) const;
+  void forces(double t, const Vec& q, const Vec& v, double& F_N, double& F_T) const;
   /// Value (unscaled) of a contact witness at a full state of the phase.
-  double witness_value(Witness w, double t, Vec7 q, Vec7 v) const;
+  double witness_value(Witness w, double t, const Vec& q, const Vec& v) const;
 
  protected:
   /// Session state layout; the defaults are the full coordinates (q, v).
-  virtual int n() const { return kN; }
-  virtual void to_full(const double* ys, Vec7& q, Vec7& v) const;
-  virtual void chart_in(const Vec7& q, const Vec7& v, Vec7& q0, Vec7& v0);
+  virtual int size() const { return 2 * n_; }
+  virtual void to_full(const double* ys, Vec& q, Vec& v) const;
+  virtual void chart_in(const Vec& q, const Vec& v, Vec& q0, Vec& v0);
   virtual bool projection() const { return false; }
-  /// Creates the session: n mechanical components, then the works.
-  void open(int n, CvodeMethod method, const SessionSettings& s, const ChartScales& scales,
+  /// Creates the session: `size` mechanical components, then the works.
+  void open(int size, CvodeMethod method, const SessionSettings& s, const ChartScales& scales,
             const CvodeCallbacks& cb);
   /// Rates of the works: applied loads, dampers, friction (friction power given).
-  void powers(double t, const Vec7& q, const Vec7& v, double friction, double* w) const;
+  void powers(double t, VecIn q, VecIn v, double friction, double* w) const;
 
   const LagrangianModel& m_;
+  const int n_;  ///< the model's dofs
   const ContactLaw law_;
   const WitnessSet& wit_;
   Phase phase_ = Phase::Free;
-  SessionState ys_{};  ///< the session's state
+  std::vector<double> ys_;  ///< the session's state
 
  private:
   static int roots(double t, const double* y, double* g, void* user);
   std::unique_ptr<CvodeSession> session_;
-  SessionState rtol_{}, atol_{};
+  std::vector<double> rtol_, atol_;
+  // scratch of the const queries (interpolate, works_at, forces, witness_value) and of roots()
+  mutable std::vector<double> ys_scratch_;
+  mutable ContactScratch query_, roots_;
+  mutable ContactKinematics kin_;
 };
 
 class FreeFlight final : public PhaseSystem {
@@ -130,18 +144,23 @@ class FreeFlight final : public PhaseSystem {
  private:
   static int rhs(double t, const double* y, double* yd, void* user);
   static int jac(double t, const double* y, const double* yd, double* J, void* user);
+  // Jacobian workspace (BDF only)
+  Mat M_, dfdq_, dfdv_, dMa_;
+  Vec f_, a_;
+  Eigen::LDLT<Mat> ldlt_;
 };
 
 class ProjectedContact final : public PhaseSystem {
  public:
   ProjectedContact(const LagrangianModel& m, const WitnessSet& w, const SessionSettings& s);
-  void contact_point(double t, Vec7& q, Vec7& v, ContactOperators& op) const override;
+  void contact_point(double t, Vec& q, Vec& v, ContactOperators& op) const override;
 
  private:
   bool projection() const override { return true; }
   static int rhs(double t, const double* y, double* yd, void* user);
   static int proj(double t, const double* y, double* corr, void* user);
   double g0_;
+  ContactScratch rhs_, proj_;
 };
 
 class ReducedContact final : public PhaseSystem {
@@ -150,15 +169,16 @@ class ReducedContact final : public PhaseSystem {
                  const ContactChart& chart, ChartMode mode);
 
  private:
-  int n() const override { return 2 * dim_; }
-  void to_full(const double* ys, Vec7& q, Vec7& v) const override;
-  void chart_in(const Vec7& q, const Vec7& v, Vec7& q0, Vec7& v0) override;
-  void unpack(const double* ys, Vec7& p, Vec7& pd) const;
+  int size() const override { return 2 * dim_; }
+  void to_full(const double* ys, Vec& q, Vec& v) const override;
+  void chart_in(const Vec& q, const Vec& v, Vec& q0, Vec& v0) override;
   static int rhs(double t, const double* y, double* yd, void* user);
   const ContactChart& chart_;
   const ChartMode mode_;
   const int dim_;
-  Vec7 anchor_ = Vec7::Zero();
+  ChartAnchor anchor_{};
+  ContactScratch rhs_;
+  Vec p_, pd_, pdd_;
 };
 
 }  // namespace rubdyn::detail

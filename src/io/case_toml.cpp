@@ -70,12 +70,17 @@ const std::vector<KeySpec>& schema() {
     num("contact", "e_t", false, [](CaseSpec& c) { return &c.params.contact.e_t; });
     num("loads", "gravity", true, [](CaseSpec& c) { return &c.params.loads.gravity; });
     num("loads", "torque", true, [](CaseSpec& c) { return &c.params.loads.torque; });
-    for (int i = 0; i < kNumDofs; ++i) {
-      num("initial", kDofNames[i], false, [i](CaseSpec& c) { return &c.initial.q0[i]; });
+    // the keys of the initial state are the model's coordinates and their rates
+    static const RotorStatorModel model{RotorStatorParams{}};
+    const auto& coords = model.coordinates();
+    for (std::size_t i = 0; i < coords.size(); ++i) {
+      const auto k = static_cast<Eigen::Index>(i);
+      num("initial", coords[i].name.c_str(), false, [k](CaseSpec& c) { return &c.initial.q0[k]; });
     }
-    for (int i = 0; i < kNumDofs; ++i) {
-      const char* name = i == TH ? "omega0" : kVelNames[i];
-      num("initial", name, false, [i](CaseSpec& c) { return &c.initial.v0[i]; });
+    for (std::size_t i = 0; i < coords.size(); ++i) {
+      const auto k = static_cast<Eigen::Index>(i);
+      num("initial", coords[i].rate_key.c_str(), false,
+          [k](CaseSpec& c) { return &c.initial.v0[k]; });
     }
     num("run", "t_start", false, [](CaseSpec& c) { return &c.run.t_start; });
     num("run", "t_end", true, [](CaseSpec& c) { return &c.run.t_end; });
@@ -459,7 +464,7 @@ class Loader {
     }
     // The initial state must not penetrate the stator: d_N = g0 - |(x_r - x_s, y_r - y_s)| >= 0.
     if (s.gap > 0) {
-      const Vec7& q = c.initial.q0;
+      const Vec& q = c.initial.q0;
       const double dN = s.gap - std::hypot(q[XR] - q[XS], q[YR] - q[YS]);
       // A state on the constraint written by a run (17 significant digits) gives d_N within
       // round-off of 0, of either sign: touching. 64 ulps of g0 is about 3e-18 m for the

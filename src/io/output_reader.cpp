@@ -9,6 +9,8 @@
 #include <stdexcept>
 
 #include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/columns.hpp"
+#include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/io/text_files.hpp"
 
 namespace rubdyn {
@@ -82,44 +84,53 @@ RunRecord read_run(const std::string& dir) {
   r.spec = load_case(case_path);
   const CsvTable ts = read_csv(ts_path);
   r.warnings = ts.warnings;
-  static const char* kCols[] = {"t",    "x_b",  "y_b",  "x_r",  "y_r",  "theta", "x_s",
-                                "y_s",  "vx_b", "vy_b", "vx_r", "vy_r", "omega", "vx_s",
-                                "vy_s", "d_N",  "v_N",  "v_t",  "F_N",  "F_T",   "phase"};
-  int at[std::size(kCols)];
-  for (size_t c = 0; c < std::size(kCols); ++c) {
-    at[c] = ts.column(kCols[c]);
+  const std::unique_ptr<LagrangianModel> model = build_model(r.spec);
+  const std::vector<SampleColumn> cols = timeseries_columns(*model);
+  std::vector<int> at(cols.size());
+  for (std::size_t c = 0; c < cols.size(); ++c) {
+    at[c] = ts.column(cols[c].name);
     if (at[c] < 0) {
       throw std::runtime_error(
-          fmt::format("{}:1: column '{}' missing (rubdyn output expected)", ts_path, kCols[c]));
+          fmt::format("{}:1: column '{}' missing (rubdyn output expected)", ts_path, cols[c].name));
     }
   }
+  const int n = model->num_dofs();
   r.samples.reserve(ts.rows.size());
   for (std::size_t k = 0; k < ts.rows.size(); ++k) {
     const auto& v = ts.rows[k];
     const long ln = ts.line_of[k];
-    auto num = [&](int c) {
+    Sample s(n, model->contact_count());
+    for (std::size_t c = 0; c < cols.size(); ++c) {
+      const SampleColumn& col = cols[c];
+      const std::string& field = v[static_cast<std::size_t>(at[c])];
+      if (col.field == SampleField::Phase) {
+        s.contacts[static_cast<std::size_t>(col.index)].phase = phase_of(field, ts_path, ln);
+        continue;
+      }
       double x;
-      if (!parse_number(v[at[c]], x))
+      if (!parse_number(field, x))
         throw std::runtime_error(
-            fmt::format("{}:{}: column {}: '{}' is not a number", ts_path, ln, kCols[c], v[at[c]]));
-      return x;
-    };
-    Sample s;
-    s.t = num(0);
-    for (int i = 0; i < kNumDofs; ++i) {
-      s.q[i] = num(1 + i);
-      s.v[i] = num(8 + i);
+            fmt::format("{}:{}: column {}: '{}' is not a number", ts_path, ln, col.name, field));
+      ContactSample* cs = col.field == SampleField::Time || col.field == SampleField::Position ||
+                                  col.field == SampleField::Velocity
+                              ? nullptr
+                              : &s.contacts[static_cast<std::size_t>(col.index)];
+      switch (col.field) {
+        case SampleField::Time: s.t = x; break;
+        case SampleField::Position: s.q[col.index] = x; break;
+        case SampleField::Velocity: s.v[col.index] = x; break;
+        case SampleField::Gap: cs->d_N = x; break;
+        case SampleField::GapRate: cs->v_N = x; break;
+        case SampleField::SlipSpeed: cs->v_t = x; break;
+        case SampleField::NormalForce: cs->F_N = x; break;
+        case SampleField::TangentialForce: cs->F_T = x; break;
+        case SampleField::Phase: break;
+      }
     }
-    s.d_N = num(15);
-    s.v_N = num(16);
-    s.v_t = num(17);
-    s.F_N = num(18);
-    s.F_T = num(19);
-    s.phase = phase_of(v[at[20]], ts_path, ln);
     if (!r.samples.empty() && s.t < r.samples.back().t) {
       throw std::runtime_error(fmt::format("{}:{}: t = {} goes back in time", ts_path, ln, s.t));
     }
-    r.samples.push_back(s);
+    r.samples.push_back(std::move(s));
   }
   const std::string ev_path = (fs::path(dir) / "events.csv").string();
   if (fs::exists(ev_path)) {

@@ -2,21 +2,21 @@
 
 #include <stdexcept>
 
+#include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/io/solver_registry.hpp"
-#include "rubdyn/model/rotor_stator_model.hpp"
 
 namespace rubdyn {
 
 RunSummary simulate(const CaseSpec& spec, OutputSink& sink, const ProgressFn& progress,
                     const std::atomic<bool>* stop) {
-  const RotorStatorModel model(spec.params);
+  const std::unique_ptr<LagrangianModel> model = build_model(spec);
   MechanicalState s0;
   s0.q = spec.initial.q0;
   s0.v = spec.initial.v0;
   s0.t = spec.run.t_start;
   const SolverEntry* solver = find_solver(spec.solver.kind);
   if (!solver) throw std::runtime_error("unknown solver kind " + spec.solver.kind);
-  return solver->run(spec, model, s0, sink, progress, stop);
+  return solver->run(spec, *model, s0, sink, progress, stop);
 }
 
 }  // namespace rubdyn

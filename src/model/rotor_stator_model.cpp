@@ -1,8 +1,23 @@
 #include "rubdyn/model/rotor_stator_model.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace rubdyn {
+
+const std::vector<Coordinate>& RotorStatorModel::coordinates() const {
+  using R = CoordinateRole;
+  static const std::vector<Coordinate> c = {
+      {"x_b", "vx_b", "vx_b", "m", "bearing B, horizontal", R::BearingX, 0},
+      {"y_b", "vy_b", "vy_b", "m", "bearing B, vertical", R::BearingY, 0},
+      {"x_r", "vx_r", "vx_r", "m", "rotor centre in the contact plane R, horizontal", R::RotorX, 0},
+      {"y_r", "vy_r", "vy_r", "m", "rotor centre in the contact plane R, vertical", R::RotorY, 0},
+      {"theta", "omega", "omega0", "rad", "spin angle (its rate: the spin speed)", R::Spin, 0},
+      {"x_s", "vx_s", "vx_s", "m", "stator centre, horizontal", R::StatorX, 0},
+      {"y_s", "vy_s", "vy_s", "m", "stator centre, vertical", R::StatorY, 0},
+  };
+  return c;
+}
 
 RotorStatorModel::RotorStatorModel(const RotorStatorParams& p)
     : p_(p), chart_(p.stator.gap, p.rotor.radius) {
@@ -15,7 +30,7 @@ RotorStatorModel::RotorStatorModel(const RotorStatorParams& p)
   M22_ = nu_ * nu_ * r.mass + jl;
   H_ = r.Jp / (l_ * l_);
 
-  M0_.setZero();
+  M0_.setZero(kDofs, kDofs);
   M0_(XB, XB) = M0_(YB, YB) = M11_;
   M0_(XR, XR) = M0_(YR, YR) = M22_;
   M0_(XB, XR) = M0_(XR, XB) = M12_;
@@ -23,7 +38,7 @@ RotorStatorModel::RotorStatorModel(const RotorStatorParams& p)
   M0_(TH, TH) = r.Jp;
   M0_(XS, XS) = M0_(YS, YS) = p.stator.mass;
 
-  G_.setZero();
+  G_.setZero(kDofs, kDofs);
   G_(XB, YB) = H_;
   G_(XB, YR) = -H_;
   G_(YB, XB) = -H_;
@@ -33,23 +48,27 @@ RotorStatorModel::RotorStatorModel(const RotorStatorParams& p)
   G_(YR, XB) = H_;
   G_(YR, XR) = -H_;
 
-  D_.setZero();
+  D_.setZero(kDofs, kDofs);
   D_(XB, XB) = D_(YB, YB) = p.bearing.c;
   D_(XS, XS) = D_(YS, YS) = p.stator.c;
-  K_.setZero();
+  K_.setZero(kDofs, kDofs);
   K_(XB, XB) = K_(YB, YB) = p.bearing.k;
   K_(XS, XS) = K_(YS, YS) = p.stator.k;
 
   const double mg = r.mass * p.loads.gravity;
-  fext_.setZero();
+  fext_.setZero(kDofs);
   fext_[YB] = -(1.0 - nu_) * mg;
   fext_[YR] = -nu_ * mg;
   fext_[TH] = p.loads.torque;
+  M0f_ = M0_;
+  Gf_ = G_;
+  Df_ = D_;
+  Kf_ = K_;
   detA_ = M11_ * M22_ - M12_ * M12_;
   Minv_s_ = 1.0 / p.stator.mass;
 }
 
-void RotorStatorModel::solve_mass(const Vec7& q, Mat7x3& B, int ncols) const {
+void RotorStatorModel::solve_mass(VecIn q, MatOut B) const {
   // Block elimination of theta (header): A^-1 = [[M22, -M12], [-M12, M11]] / det A on each of
   // the pairs (x_b, x_r) and (y_b, y_r).
   const double a11 = M22_ / detA_, a12 = -M12_ / detA_, a22 = M11_ / detA_;
@@ -58,7 +77,7 @@ void RotorStatorModel::solve_mass(const Vec7& q, Mat7x3& B, int ncols) const {
   const double ub = a11 - a12, ur = a12 - a22;  // A^-1 (1, -1) on a pair
   const double u_xb = Hy * ub, u_xr = Hy * ur, u_yb = Hx * ub, u_yr = Hx * ur;
   const double schur = p_.rotor.Jp - (Hy * (u_xb - u_xr) + Hx * (u_yb - u_yr));
-  for (int j = 0; j < ncols; ++j) {
+  for (Eigen::Index j = 0; j < B.cols(); ++j) {
     auto r = B.col(j);
     const double zxb = a11 * r[XB] + a12 * r[XR], zxr = a12 * r[XB] + a22 * r[XR];
     const double zyb = a11 * r[YB] + a12 * r[YR], zyr = a12 * r[YB] + a22 * r[YR];
@@ -73,27 +92,25 @@ void RotorStatorModel::solve_mass(const Vec7& q, Mat7x3& B, int ncols) const {
   }
 }
 
-void RotorStatorModel::Chart::chart(ChartMode mode, const Vec7& q, const Vec7& v, Vec7& anchor,
-                                    Vec7& p, Vec7& pd) const {
+void RotorStatorModel::Chart::chart(ChartMode mode, VecIn q, VecIn v, ChartAnchor& anchor, VecOut p,
+                                    VecOut pd) const {
   const double phi = std::atan2(q[YR] - q[YS], q[XR] - q[XS]);
-  anchor.setZero();
-  p.setZero();
-  pd.setZero();
+  anchor.fill(0.0);
   if (mode == ChartMode::Slip) {
     // phi' from the tangential component of the relative velocity (v_N = 0 on the manifold)
     const double phid = (-std::sin(phi) * (v[XR] - v[XS]) + std::cos(phi) * (v[YR] - v[YS])) / g0_;
-    p << q[XB], q[YB], phi, q[TH], q[XS], q[YS], 0.0;
-    pd << v[XB], v[YB], phid, v[TH], v[XS], v[YS], 0.0;
+    p << q[XB], q[YB], phi, q[TH], q[XS], q[YS];
+    pd << v[XB], v[YB], phid, v[TH], v[XS], v[YS];
   } else {
     anchor[0] = phi;
     anchor[1] = q[TH];
-    p << q[XB], q[YB], 0.0, q[XS], q[YS], 0.0, 0.0;
-    pd << v[XB], v[YB], v[TH], v[XS], v[YS], 0.0, 0.0;
+    p << q[XB], q[YB], 0.0, q[XS], q[YS];
+    pd << v[XB], v[YB], v[TH], v[XS], v[YS];
   }
 }
 
-void RotorStatorModel::Chart::embed(ChartMode mode, const Vec7& anchor, const Vec7& p,
-                                    const Vec7& pd, Vec7& q, Vec7& v) const {
+void RotorStatorModel::Chart::embed(ChartMode mode, const ChartAnchor& anchor, VecIn p, VecIn pd,
+                                    VecOut q, VecOut v) const {
   double phi, phid, xs, ys, vxs, vys;
   if (mode == ChartMode::Slip) {
     phi = p[2];
@@ -124,29 +141,32 @@ void RotorStatorModel::Chart::embed(ChartMode mode, const Vec7& anchor, const Ve
   v[YR] = vys + g0_ * phid * c;
 }
 
-void RotorStatorModel::Chart::reduce(ChartMode mode, const Vec7& /*anchor*/, const Vec7& p,
-                                     const Vec7& /*pd*/, const Vec7& q, const Vec7& a,
-                                     Vec7& pdd) const {
-  pdd.setZero();
+void RotorStatorModel::Chart::reduce(ChartMode mode, const ChartAnchor& /*anchor*/, VecIn /*p*/,
+                                     VecIn /*pd*/, VecIn q, VecIn a, VecOut pdd) const {
   if (mode == ChartMode::Slip) {
     // t_phi . (a_r - a_s) / g0, with t_phi from the embedded q (no second sin/cos)
     const double tx = -(q[YR] - q[YS]) / g0_, ty = (q[XR] - q[XS]) / g0_;
-    pdd << a[XB], a[YB], (tx * (a[XR] - a[XS]) + ty * (a[YR] - a[YS])) / g0_, a[TH], a[XS], a[YS],
-        0.0;
-    (void)p;
+    pdd << a[XB], a[YB], (tx * (a[XR] - a[XS]) + ty * (a[YR] - a[YS])) / g0_, a[TH], a[XS], a[YS];
   } else {
-    pdd << a[XB], a[YB], a[TH], a[XS], a[YS], 0.0, 0.0;
+    pdd << a[XB], a[YB], a[TH], a[XS], a[YS];
   }
 }
 
 ChartScales RotorStatorModel::Chart::scales(ChartMode mode) const {
   ChartScales sc;
+  sc.length.assign(static_cast<std::size_t>(dim(mode)), 0.0);
   sc.length[2] = mode == ChartMode::Slip ? g0_ : R_r_;
   return sc;
 }
 
-void RotorStatorModel::mass_matrix(const Vec7& q, Mat7& M) const {
-  M = M0_;
+void RotorStatorModel::mass_matrix(VecIn q, MatOut M) const {
+  // (a fixed-size copy when M is contiguous: unrolled, where an assignment to a Ref of unknown
+  // outer stride is a loop)
+  if (M.outerStride() == kDofs) {
+    Eigen::Map<Eigen::Matrix<double, kDofs, kDofs>>(M.data()) = M0f_;
+  } else {
+    M = M0_;
+  }
   const double Hx = 0.5 * H_ * (q[XR] - q[XB]);
   const double Hy = -0.5 * H_ * (q[YR] - q[YB]);
   M(XB, TH) = M(TH, XB) = Hy;
@@ -155,8 +175,20 @@ void RotorStatorModel::mass_matrix(const Vec7& q, Mat7& M) const {
   M(YR, TH) = M(TH, YR) = -Hx;
 }
 
-void RotorStatorModel::mass_matrix_product_jacobian(const Vec7& /*q*/, const Vec7& a,
-                                                    Mat7& J) const {
+void RotorStatorModel::mass_product(VecIn q, VecIn x, VecOut y) const {
+  // M(q) x with the structure of M (header). Each row sums its terms in column order, as a dense
+  // product does (the zero terms add nothing), so that the result is that of M(q) * x.
+  const double Hx = 0.5 * H_ * (q[XR] - q[XB]), Hy = -0.5 * H_ * (q[YR] - q[YB]);
+  y[XB] = M11_ * x[XB] + M12_ * x[XR] + Hy * x[TH];
+  y[YB] = M11_ * x[YB] + M12_ * x[YR] + Hx * x[TH];
+  y[XR] = M12_ * x[XB] + M22_ * x[XR] + -Hy * x[TH];
+  y[YR] = M12_ * x[YB] + M22_ * x[YR] + -Hx * x[TH];
+  y[TH] = Hy * x[XB] + Hx * x[YB] + -Hy * x[XR] + -Hx * x[YR] + p_.rotor.Jp * x[TH];
+  y[XS] = p_.stator.mass * x[XS];
+  y[YS] = p_.stator.mass * x[YS];
+}
+
+void RotorStatorModel::mass_matrix_product_jacobian(VecIn /*q*/, VecIn a, MatOut J) const {
   // (M a) depends on q only through H_x = H (x_r - x_b)/2 and H_y = -H (y_r - y_b)/2.
   const double h = 0.5 * H_;
   J.setZero();
@@ -175,7 +207,7 @@ void RotorStatorModel::mass_matrix_product_jacobian(const Vec7& /*q*/, const Vec
   J(TH, XB) = -h * (a[YB] - a[YR]);
 }
 
-void RotorStatorModel::smooth_forces(double /*t*/, const Vec7& q, const Vec7& v, Vec7& f) const {
+void RotorStatorModel::smooth_forces(double /*t*/, VecIn q, VecIn v, VecOut f) const {
   // f = f_ext - theta' G v - D v - K q, written out (G, D, K are sparse).
   const double Hw = H_ * v[TH];
   const double cb = p_.bearing.c, cs = p_.stator.c, kb = p_.bearing.k, ks = p_.stator.k;
@@ -188,15 +220,29 @@ void RotorStatorModel::smooth_forces(double /*t*/, const Vec7& q, const Vec7& v,
   f[YS] = -cs * v[YS] - ks * q[YS];
 }
 
-void RotorStatorModel::smooth_force_jacobians(double /*t*/, const Vec7& /*q*/, const Vec7& v,
-                                              Mat7& dfdq, Mat7& dfdv) const {
+void RotorStatorModel::smooth_force_jacobians(double /*t*/, VecIn /*q*/, VecIn v, MatOut dfdq,
+                                              MatOut dfdv) const {
+  if (dfdq.outerStride() == kDofs && dfdv.outerStride() == kDofs) {
+    // contiguous: the fixed-size matrices (unrolled; the steppers' fast path)
+    using M7 = Eigen::Matrix<double, kDofs, kDofs>;
+    Eigen::Map<M7> Q(dfdq.data()), V(dfdv.data());
+    const Eigen::Map<const Eigen::Matrix<double, kDofs, 1>> v7(v.data());
+    Q = -Kf_;
+    V = -v[TH] * Gf_ - Df_;
+    V.col(TH) = -(Gf_ * v7);  // d(theta' G v)/d(theta') = G v
+    return;
+  }
   dfdq = -K_;
   dfdv = -v[TH] * G_ - D_;
-  dfdv.col(TH) = -(G_ * v);  // d(theta' G v)/d(theta') = G v
+  dfdv.col(TH).noalias() = -(G_ * v);
 }
 
-ContactKinematics RotorStatorModel::contact(const Vec7& q, const Vec7& v) const {
-  ContactKinematics c;
+void RotorStatorModel::compute_contact(int /*k*/, double /*t*/, VecIn q, VecIn v,
+                                       ContactKinematics& c) const {
+  // every entry of W_N and W_T written (the zeros too: no memset call in this hot path)
+  double* wn = c.W_N.data();
+  double* wt = c.W_T.data();
+  c.b_N = c.b_T = 0.0;
   const double sx = q[XR] - q[XS], sy = q[YR] - q[YS];
   // sqrt instead of hypot: positions are O(1e-3) m at most, no overflow or underflow is
   // possible, and hypot's extra precision costs ~2x in the hot path of every solver
@@ -204,46 +250,97 @@ ContactKinematics RotorStatorModel::contact(const Vec7& q, const Vec7& v) const 
   c.d_N = p_.stator.gap - rho;
   if (rho == 0.0) {  // centred rotor: no normal; d_N = g0 > 0, so no contact can exist here
     c.normal_defined = false;
-    return c;
+    for (int i = 0; i < kDofs; ++i) wn[i] = wt[i] = 0.0;
+    c.v_N = c.v_t = c.wdot_N = c.wdot_T = 0.0;
+    return;
   }
+  c.normal_defined = true;
   const double nx = sx / rho, ny = sy / rho;
   const double tx = ny, ty = -nx;
-  c.W_N[XR] = -nx;
-  c.W_N[YR] = -ny;
-  c.W_N[XS] = nx;
-  c.W_N[YS] = ny;
-  c.W_T[XR] = tx;
-  c.W_T[YR] = ty;
-  c.W_T[TH] = -p_.rotor.radius;
-  c.W_T[XS] = -tx;
-  c.W_T[YS] = -ty;
+  wn[XB] = wn[YB] = wn[TH] = 0.0;
+  wn[XR] = -nx;
+  wn[YR] = -ny;
+  wn[XS] = nx;
+  wn[YS] = ny;
+  wt[XB] = wt[YB] = 0.0;
+  wt[XR] = tx;
+  wt[YR] = ty;
+  wt[TH] = -p_.rotor.radius;
+  wt[XS] = -tx;
+  wt[YS] = -ty;
   const double dvx = v[XR] - v[XS], dvy = v[YR] - v[YS];
-  const double wn = nx * dvx + ny * dvy;  // n . dsr/dt
-  const double wt = tx * dvx + ty * dvy;  // t . dsr/dt
-  c.v_N = -wn;
-  c.v_t = wt - p_.rotor.radius * v[TH];
-  c.wdot_N = -wt * wt / rho;
-  c.wdot_T = wt * c.v_N / rho;
-  return c;
+  const double wn_ = nx * dvx + ny * dvy;  // n . dsr/dt
+  const double wt_ = tx * dvx + ty * dvy;  // t . dsr/dt
+  c.v_N = -wn_;
+  c.v_t = wt_ - p_.rotor.radius * v[TH];
+  c.wdot_N = -wt_ * wt_ / rho;
+  c.wdot_T = wt_ * c.v_N / rho;
 }
 
-double RotorStatorModel::potential_energy(const Vec7& q) const {
+double RotorStatorModel::kinetic_energy(VecIn q, VecIn v) const {
+  // 1/2 v^T M(q) v with the structure of M (header): the rotor's 2x2 blocks, the spin and its
+  // coupling through H_x, H_y, the stator.
+  const double Hx = 0.5 * H_ * (q[XR] - q[XB]), Hy = -0.5 * H_ * (q[YR] - q[YB]);
+  const double rot = M11_ * (v[XB] * v[XB] + v[YB] * v[YB]) +
+                     2.0 * M12_ * (v[XB] * v[XR] + v[YB] * v[YR]) +
+                     M22_ * (v[XR] * v[XR] + v[YR] * v[YR]);
+  const double spin =
+      p_.rotor.Jp * v[TH] * v[TH] + 2.0 * v[TH] * (Hy * (v[XB] - v[XR]) + Hx * (v[YB] - v[YR]));
+  const double stator = p_.stator.mass * (v[XS] * v[XS] + v[YS] * v[YS]);
+  return 0.5 * (rot + spin + stator);
+}
+
+double RotorStatorModel::potential_energy(VecIn q) const {
   const double mg = p_.rotor.mass * p_.loads.gravity;
   return 0.5 * p_.bearing.k * (q[XB] * q[XB] + q[YB] * q[YB]) +
          mg * (nu_ * q[YR] + (1.0 - nu_) * q[YB]) +
          0.5 * p_.stator.k * (q[XS] * q[XS] + q[YS] * q[YS]);
 }
 
-double RotorStatorModel::bearing_damping_power(const Vec7& v) const {
+double RotorStatorModel::bearing_damping_power(VecIn v) const {
   return -p_.bearing.c * (v[XB] * v[XB] + v[YB] * v[YB]);
 }
 
-double RotorStatorModel::stator_damping_power(const Vec7& v) const {
+double RotorStatorModel::stator_damping_power(VecIn v) const {
   return -p_.stator.c * (v[XS] * v[XS] + v[YS] * v[YS]);
 }
 
-SmoothPower RotorStatorModel::smooth_power(double /*t*/, const Vec7& /*q*/, const Vec7& v) const {
+SmoothPower RotorStatorModel::smooth_power(double /*t*/, VecIn /*q*/, VecIn v) const {
   return {torque_power(v), bearing_damping_power(v) + stator_damping_power(v)};
+}
+
+std::optional<LinearModel> RotorStatorModel::linearize(Linearization mode) const {
+  // About the centred position (H_x = H_y = 0: the spin row decouples) with the spin imposed.
+  LinearModel lm;
+  const bool tied = mode == Linearization::Tied;
+  // the coordinates kept (the stator's are merged into R's when tied)
+  const std::vector<int> idx =
+      tied ? std::vector<int>{XB, YB, XR, YR} : std::vector<int>{XB, YB, XR, YR, XS, YS};
+  const int n = static_cast<int>(idx.size());
+  for (int i : idx) lm.names.push_back(coordinates()[static_cast<std::size_t>(i)].name);
+  lm.M.setZero(n, n);
+  lm.G.setZero(n, n);
+  lm.D.setZero(n, n);
+  lm.K.setZero(n, n);
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b) {
+      lm.M(a, b) = M0_(idx[a], idx[b]);
+      lm.G(a, b) = G_(idx[a], idx[b]);
+      lm.D(a, b) = D_(idx[a], idx[b]);
+      lm.K(a, b) = K_(idx[a], idx[b]);
+    }
+  if (tied) {
+    // the stator tied at R: x_s = x_r, y_s = y_r
+    for (int a : {2, 3}) {
+      lm.M(a, a) += p_.stator.mass;
+      lm.D(a, a) += p_.stator.c;
+      lm.K(a, a) += p_.stator.k;
+    }
+    lm.nodes = {{0, 1}, {2, 3}};
+  } else {
+    lm.nodes = {{0, 1}, {2, 3}, {4, 5}};
+  }
+  return lm;
 }
 
 }  // namespace rubdyn

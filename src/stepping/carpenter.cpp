@@ -27,15 +27,42 @@ namespace rubdyn {
 
 namespace {
 
+/// N: the model's dofs, fixed (a fast path) or Eigen::Dynamic (simplified_newton.hpp).
+template <int N>
 class Carpenter final : public Stepper {
+  using V = detail::SVec<N>;
+  using M = detail::SMat<N>;
+
  public:
   Carpenter(const LagrangianModel& m, const FixedStepOptions& o)
       : m_(m),
-        law_(m.contact_law()),
+        n_(m.num_dofs()),
+        law_(m.contact_law(0)),
         o_(o),
         qn_(o.scheme == FixedStepScheme::CarpQN),
         spin_(m.spin_coordinate()),
-        newton_(30) {}
+        newton_(n_, 30),
+        q_(V::Zero(n_)),
+        v_(V::Zero(n_)),
+        dq_prev_(V::Zero(n_)),
+        M_(n_, n_),
+        dfdq_(n_, n_),
+        dfdv_(n_, n_),
+        J_(n_, n_),
+        Mbar_(n_, n_),
+        f_(V::Zero(n_)),
+        d_(V::Zero(n_)),
+        dn_(V::Zero(n_)),
+        R_(V::Zero(n_)),
+        w_(V::Zero(n_)),
+        vc_(V::Zero(n_)),
+        qp_(V::Zero(n_)),
+        step_(V::Zero(n_)),
+        CNT_(V::Zero(n_)),
+        x_(V::Zero(n_)),
+        dx_(V::Zero(n_)),
+        lu_(n_),
+        kin_(n_) {}
 
   std::string_view name() const override { return qn_ ? "carp-qn" : "carp-onevc"; }
   std::string options_json() const override {
@@ -43,16 +70,14 @@ class Carpenter final : public Stepper {
                        o_.qn_tol);
   }
 
-  void start(double t0, const Vec7& q0, const Vec7& v0) override {
+  void start(double t0, const Vec& q0, const Vec& v0) override {
     // Start-up: q_1 = q_0 + h v_0 + h^2/2 a_0 with a_0 the contact-free acceleration, i.e. the
     // scheme applied at i = 0 with a fictitious q_{-1} = q_0 - h v_0 + h^2/2 a_0: then the
     // central velocity at t_0 is exactly v_0. The spin acceleration history (Algorithm 1's
     // linear guess) starts at a_0's.
-    Mat7 M;
-    Vec7 f;
-    m_.mass_matrix(q0, M);
-    m_.smooth_forces(t0, q0, v0, f);
-    const Vec7 a0 = M.ldlt().solve(f);
+    m_.mass_matrix(q0, M_);
+    m_.smooth_forces(t0, q0, v0, f_);
+    const V a0 = M_.ldlt().solve(f_);
     q_ = q0;
     v_ = v0;
     dq_prev_ = o_.h * v0 - 0.5 * o_.h * o_.h * a0;
@@ -63,66 +88,94 @@ class Carpenter final : public Stepper {
   StepOutcome step(double t, StepReport& r, std::string& message) override;
 
  private:
+  /// R(Delta) at d_ (into R_), and with_jacobians: the prediction Jacobian J_ and M-bar.
+  void residual(double t, const V& d, bool with_jacobians);
+  /// The correction of the increment dd along C_NT (Algorithm 1, eq. 25-26) when the
+  /// prediction penetrates; solve_mbar(b, x) sets x = M-bar^{-1} b. kin_ready: kin_ already
+  /// holds the kinematics at the prediction (q_i + dd, central velocity).
+  template <class SolveMbar>
+  void correct(V& dd, const SolveMbar& solve_mbar, double& FN, double& FT, Phase& ph,
+               bool kin_ready = false);
+
   const LagrangianModel& m_;
+  const int n_;
   const ContactLaw law_;
   const FixedStepOptions o_;
   const bool qn_;
   const int spin_;
-  detail::SimplifiedNewton newton_;
-  Vec7 q_ = Vec7::Zero(), v_ = Vec7::Zero();  // q_i; the central velocity of the last report
-  Vec7 dq_prev_ = Vec7::Zero();               // Delta_i = q_i - q_{i-1}
-  double acc_prev_ = 0.0, acc_prev2_ = 0.0;   // spin acceleration at t_{i-1}, t_{i-2}
+  detail::SimplifiedNewton<N> newton_;
+  V q_, v_;                                  // q_i; the central velocity of the last report
+  V dq_prev_;                                // Delta_i = q_i - q_{i-1}
+  double acc_prev_ = 0.0, acc_prev2_ = 0.0;  // spin acceleration at t_{i-1}, t_{i-2}
   long index_ = 0;
+  bool painleve_ = false;
+  // workspaces
+  M M_, dfdq_, dfdv_, J_, Mbar_;
+  V f_, d_, dn_, R_, w_, vc_, qp_, step_, CNT_, x_, dx_;
+  Eigen::PartialPivLU<M> lu_;
+  ContactKinematics kin_;
 };
 
-StepOutcome Carpenter::step(double t, StepReport& r, std::string& message) {
+template <int N>
+void Carpenter<N>::residual(double t, const V& d, bool with_jacobians) {
   const double h = o_.h, h2 = h * h;
-  const ContactKinematics c_start = m_.contact(q_, v_);
-  Mat7 M, dfdq, dfdv, J, Mbar;
-  Vec7 f;
-  m_.mass_matrix(q_, M);
-  auto residual = [&](const Vec7& d, Vec7& R, bool with_jacobians) {
-    const Vec7 v = (d + dq_prev_) / (2.0 * h);
-    m_.smooth_forces(t, q_, v, f);
-    R = M * (d - dq_prev_) / h2 - f;
-    if (with_jacobians) {
-      m_.smooth_force_jacobians(t, q_, v, dfdq, dfdv);
-      J = M / h2 - dfdv / (2.0 * h);
-      Mbar = J;
-      if (spin_ >= 0) Mbar.col(spin_) = M.col(spin_) / h2;
-    }
-  };
+  vc_ = (d + dq_prev_) / (2.0 * h);
+  m_.smooth_forces(t, q_, vc_, f_);
+  w_ = d - dq_prev_;
+  m_.mass_product(q_, w_, R_);  // M(q_i) (Delta - Delta_i), structured
+  R_ = R_ / h2 - f_;
+  if (with_jacobians) {
+    m_.mass_matrix(q_, M_);
+    m_.smooth_force_jacobians(t, q_, vc_, dfdq_, dfdv_);
+    J_ = M_ / h2 - dfdv_ / (2.0 * h);
+    Mbar_ = J_;
+    if (spin_ >= 0) Mbar_.col(spin_) = M_.col(spin_) / h2;
+  }
+}
+
+template <int N>
+template <class SolveMbar>
+void Carpenter<N>::correct(V& dd, const SolveMbar& solve_mbar, double& FN, double& FT, Phase& ph,
+                           bool kin_ready) {
+  const double h = o_.h;
+  if (!kin_ready) {
+    qp_ = q_ + dd;
+    vc_ = (dd + dq_prev_) / (2.0 * h);
+    m_.compute_contact(0, 0.0, qp_, vc_, kin_);
+  }
+  const ContactKinematics& c = kin_;
+  FN = FT = 0.0;
+  ph = Phase::Free;
+  if (!(c.d_N < 0.0)) return;
+  const double s = law_.mu > 0.0 ? (c.v_t > 0.0 ? 1.0 : (c.v_t < 0.0 ? -1.0 : 0.0)) : 0.0;
+  CNT_ = c.W_N - law_.mu * s * c.W_T;
+  solve_mbar(CNT_, x_);
+  const double den = c.W_N.dot(x_);
+  if (!(den > 0.0)) {
+    // the correction along C_NT would need F_N < 0 to close the gap: with this friction
+    // coefficient the sliding contact of the scheme is ill-posed (Painleve-type)
+    painleve_ = true;
+    return;
+  }
+  FN = -c.d_N / den;
+  FT = -law_.mu * s * FN;
+  dd += x_ * FN;
+  ph = s < 0.0 ? Phase::SlipNeg : Phase::SlipPos;
+}
+
+template <int N>
+StepOutcome Carpenter<N>::step(double t, StepReport& r, std::string& message) {
+  const double h = o_.h, h2 = h * h;
+  m_.compute_contact(0, t, q_, v_, kin_);
+  const double v_N_start = kin_.v_N;
   // Algorithm 1's contactless first guess: linear spin acceleration.
-  Vec7 d = dq_prev_;
+  V& d = d_;
+  d = dq_prev_;
   if (spin_ >= 0) d[spin_] = (2.0 * acc_prev_ - acc_prev2_) * h2 + dq_prev_[spin_];
-  Vec7 R;
-  bool painleve = false;
-  // solve_mbar(b) returns M-bar^{-1} b for the correction
-  auto correct = [&](Vec7& dd, const auto& solve_mbar, double& FN, double& FT, Phase& ph) {
-    const Vec7 qp = q_ + dd;
-    const Vec7 vp = (dd + dq_prev_) / (2.0 * h);
-    const ContactKinematics c = m_.contact(qp, vp);
-    FN = FT = 0.0;
-    ph = Phase::Free;
-    if (!(c.d_N < 0.0)) return;
-    const double s = law_.mu > 0.0 ? (c.v_t > 0.0 ? 1.0 : (c.v_t < 0.0 ? -1.0 : 0.0)) : 0.0;
-    const Vec7 CNT = c.W_N - law_.mu * s * c.W_T;
-    const Vec7 x = solve_mbar(CNT);
-    const double den = c.W_N.dot(x);
-    if (!(den > 0.0)) {
-      // the correction along C_NT would need F_N < 0 to close the gap: with this friction
-      // coefficient the sliding contact of the scheme is ill-posed (Painleve-type)
-      painleve = true;
-      return;
-    }
-    FN = -c.d_N / den;
-    FT = -law_.mu * s * FN;
-    dd += x * FN;
-    ph = s < 0.0 ? Phase::SlipNeg : Phase::SlipPos;
-  };
+  painleve_ = false;
   double FN = 0, FT = 0;
   Phase ph = Phase::Free;
-  r = StepReport{};
+  r.reset();
   if (!qn_) {
     // Prediction: simplified Newton on R(Delta) = 0 (simplified_newton.hpp), the Jacobian
     // J = M/h^2 - dfdv/(2h). Scaled change: 1e-14 of the increment plus 1e-16 h (a velocity of
@@ -130,19 +183,19 @@ StepOutcome Carpenter::step(double t, StepReport& r, std::string& message) {
     newton_.begin_step();
     for (;;) {
       const bool refresh = newton_.needs_matrix();
-      residual(d, R, refresh);
-      if (refresh) newton_.set_matrix(J);
-      const Vec7 step = newton_.inverse() * R;
-      d -= step;
+      residual(t, d, refresh);
+      if (refresh) newton_.set_matrix(J_);
+      newton_.apply_inverse(R_, step_);
+      d -= step_;
       ++r.newton_iters;
       if (!d.allFinite()) {
         message = fmt::format("{}: non-finite iterate at t = {:.17g}", name(), t);
         return StepOutcome::NonFinite;
       }
       const auto next =
-          newton_.after((step.array().abs() / (1e-14 * d.array().abs() + 1e-16 * h)).maxCoeff());
-      if (next == detail::SimplifiedNewton::Next::Converged) break;
-      if (next == detail::SimplifiedNewton::Next::Failed) {
+          newton_.after((step_.array().abs() / (1e-14 * d.array().abs() + 1e-16 * h)).maxCoeff());
+      if (next == detail::SimplifiedNewton<N>::Next::Converged) break;
+      if (next == detail::SimplifiedNewton<N>::Next::Failed) {
         message =
             fmt::format("carp-onevc: the prediction Newton did not converge at t = {:.17g}", t);
         return StepOutcome::NewtonFailed;
@@ -150,47 +203,51 @@ StepOutcome Carpenter::step(double t, StepReport& r, std::string& message) {
     }
     // Verification, and the correction with M-bar at the predicted spin (Algorithm 1) only
     // when the prediction penetrates.
-    if (m_.contact(q_ + d, (d + dq_prev_) / (2.0 * h)).d_N < 0.0) {
-      residual(d, R, true);
+    qp_ = q_ + d;
+    vc_ = (d + dq_prev_) / (2.0 * h);
+    m_.compute_contact(0, t, qp_, vc_, kin_);
+    if (kin_.d_N < 0.0) {
+      residual(t, d, true);  // (kin_ stays: residual does not touch it)
       // M-bar differs from the prediction Jacobian only in the spin column (by G v / 2h, ~1e-7
       // of M / h^2 here): solve with M-bar by Richardson iteration preconditioned with the
       // kept inverse Jacobian, to round-off (2-3 iterations), instead of factorising M-bar.
-      const Mat7& Ji = newton_.inverse();
-      auto solve_mbar = [&](const Vec7& b) {
-        Vec7 x = Ji * b;
+      auto solve_mbar = [this](const V& b, V& x) {
+        newton_.apply_inverse(b, x);
         for (int k = 0; k < 20; ++k) {
-          const Vec7 dx = Ji * (b - Mbar * x);
-          x += dx;
-          if (dx.norm() <= 1e-15 * x.norm()) break;
+          detail::mat_vec<N>(Mbar_, x, w_);
+          w_ = b - w_;
+          newton_.apply_inverse(w_, dx_);
+          x += dx_;
+          if (dx_.norm() <= 1e-15 * x.norm()) break;
         }
-        return x;
       };
-      correct(d, solve_mbar, FN, FT, ph);
+      correct(d, solve_mbar, FN, FT, ph, true);
     }
   } else {
     // Quasi-Newton loop (Roques et al. 2010): prediction (one solve with M-bar at the current
     // spin), verification, correction, repeated until the increment settles.
     int it = 0;
     for (; it < o_.itmax; ++it) {
-      residual(d, R, true);
-      const Eigen::PartialPivLU<Mat7> lu(Mbar);
+      residual(t, d, true);
+      lu_.compute(Mbar_);
       // each pass predicts the contact-free solution at the current spin from the last iterate
       // (exact in one solve, R being affine in Delta at fixed spin) and corrects it
-      Vec7 dn = d - lu.solve(R);
+      step_ = lu_.solve(R_);
+      dn_ = d - step_;
       correct(
-          dn, [&lu](const Vec7& b) { return Vec7(lu.solve(b)); }, FN, FT, ph);
-      const Vec7 change = dn - d;
-      d = dn;
+          dn_, [this](const V& b, V& x) { x = lu_.solve(b); }, FN, FT, ph);
+      step_ = dn_ - d;  // the change of the iterate
+      d = dn_;
       ++r.newton_iters;
       if (!d.allFinite()) {
         message = fmt::format("{}: non-finite iterate at t = {:.17g}", name(), t);
         return StepOutcome::NonFinite;
       }
-      if ((change.array().abs() <= o_.qn_tol * d.array().abs() + 1e-16 * h).all()) break;
+      if ((step_.array().abs() <= o_.qn_tol * d.array().abs() + 1e-16 * h).all()) break;
     }
     r.unconverged = it == o_.itmax;
   }
-  if (painleve) {
+  if (painleve_) {
     message = fmt::format(
         "{} at t = {:.17g}: C_N^T M-bar^-1 C_NT <= 0, the correction would need F_N < 0 "
         "(sliding friction mu = {} is ill-posed for the scheme here)",
@@ -211,10 +268,10 @@ StepOutcome Carpenter::step(double t, StepReport& r, std::string& message) {
   r.P_N = FN * h;
   r.P_T = FT * h;
   r.phase = ph;
-  r.v_N_before = c_start.v_N;
+  r.v_N_before = v_N_start;
   if (FN != 0.0) {
-    const ContactKinematics c = m_.contact(q_, v_);
-    r.contact_work = (FN * c.v_N + FT * c.v_t) * h;
+    m_.compute_contact(0, t, q_, v_, kin_);
+    r.contact_work = (FN * kin_.v_N + FT * kin_.v_t) * h;
   }
   if (spin_ >= 0) {
     acc_prev2_ = acc_prev_;
@@ -228,7 +285,8 @@ StepOutcome Carpenter::step(double t, StepReport& r, std::string& message) {
 }  // namespace
 
 std::unique_ptr<Stepper> make_carpenter(const LagrangianModel& m, const FixedStepOptions& opt) {
-  return std::make_unique<Carpenter>(m, opt);
+  if (m.num_dofs() == 7) return std::make_unique<Carpenter<7>>(m, opt);  // the rigid rotor
+  return std::make_unique<Carpenter<Eigen::Dynamic>>(m, opt);
 }
 
 }  // namespace rubdyn

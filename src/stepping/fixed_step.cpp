@@ -70,7 +70,12 @@ namespace {
 class RunLoop {
  public:
   RunLoop(const LagrangianModel& m, const FixedStepOptions& o, OutputSink& sink)
-      : m_(m), o_(o), sink_(sink), mon_(m.contact_law().mu, o.omega_lim) {}
+      : m_(m),
+        o_(o),
+        sink_(sink),
+        mon_(m.contact_law(0).mu, o.omega_lim),
+        kin_(m.num_dofs()),
+        sample_(m.num_dofs(), 1) {}
 
   RunSummary run(Stepper& stepper, const MechanicalState& init, double t_end);
 
@@ -83,15 +88,19 @@ class RunLoop {
   OutputSink& sink_;
   RunMonitor mon_;
   RunSummary sum_;
+  ContactKinematics kin_;
+  Sample sample_;
   Phase prev_phase_ = Phase::Free;
   long next_sample_ = 0;
   double next_t_out_ = 0;
 };
 
 void RunLoop::record(const StepReport& r, double t) {
-  const ContactKinematics c = m_.contact(r.q, r.v);
+  m_.compute_contact(0, t, r.q, r.v, kin_);
+  const ContactKinematics& c = kin_;
   const bool in_contact = r.phase != Phase::Free;
-  mon_.observe(t, m_.spin(r.v), c.d_N, c.v_N, r.F_N, r.F_T, in_contact);
+  const double omega = m_.spin(t, r.q, r.v);
+  mon_.observe(t, omega, c.d_N, c.v_N, r.F_N, r.F_T, in_contact);
   sum_.phase_time[static_cast<int>(r.phase)] += r.index > 0 ? o_.h : 0.0;
   if (r.index > 0 && r.phase != prev_phase_) {
     EventRecord e;
@@ -132,20 +141,20 @@ void RunLoop::record(const StepReport& r, double t) {
       next_t_out_ = sum_.t_start + static_cast<double>(++next_sample_) * o_.output_dt;
   }
   if (out) {
-    Sample s;
+    Sample& s = sample_;
     s.t = t;
     s.q = r.q;
     s.v = r.v;
-    s.d_N = c.d_N;
-    s.v_N = c.v_N;
-    s.v_t = c.v_t;
-    s.F_N = r.F_N;
-    s.F_T = r.F_T;
-    s.phase = r.phase;
+    ContactSample& cs = s.contacts[0];
+    cs.d_N = c.d_N;
+    cs.v_N = c.v_N;
+    cs.v_t = c.v_t;
+    cs.F_N = r.F_N;
+    cs.F_T = r.F_T;
+    cs.phase = r.phase;
     sink_.sample(s);
     if (o_.progress)
-      o_.progress(t, std::accumulate(sum_.events.begin(), sum_.events.end(), 0L), m_.spin(r.v),
-                  r.phase);
+      o_.progress(t, std::accumulate(sum_.events.begin(), sum_.events.end(), 0L), omega, r.phase);
   }
 }
 
@@ -167,11 +176,17 @@ RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_
   double work_ext = 0.0, work_damp = 0.0, work_contact = 0.0;
   double t_prev = init.t;
   SmoothPower p_prev = m_.smooth_power(init.t, init.q, init.v);
-  Vec7 q_last = init.q, v_last = init.v;
   long unconverged = 0, nonunique = 0;
-  StepReport r;
+  // two reports, used in turn: the last completed (finite) state stays in one of them while the
+  // stepper writes the next into the other (no copy per step)
+  const int n = m_.num_dofs();
+  StepReport reports[2] = {StepReport(n), StepReport(n)};
+  reports[1].q = init.q;
+  reports[1].v = init.v;
+  const StepReport* last = &reports[1];
   std::string message;
-  for (long i = 0; r.index < n_steps || i == 0; ++i) {
+  for (long i = 0; last->index < n_steps || i == 0; ++i) {
+    StepReport& r = last == &reports[0] ? reports[1] : reports[0];
     const double t = init.t + static_cast<double>(i) * h;
     if (o_.stop && o_.stop->load(std::memory_order_relaxed)) {
       sum_.termination = Termination::Interrupted;
@@ -213,12 +228,11 @@ RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_
     work_contact += r.contact_work;
     p_prev = p;
     t_prev = tr;
-    q_last = r.q;
-    v_last = r.v;
+    last = &r;
     sum_.t_reached = tr;
     record(r, tr);
   }
-  sum_.energy_final = m_.kinetic_energy(q_last, v_last) + m_.potential_energy(q_last);
+  sum_.energy_final = m_.kinetic_energy(last->q, last->v) + m_.potential_energy(last->q);
   sum_.work_torque = work_ext;
   sum_.work_damping = work_damp;
   // contact work: friction and normal impulses together (the split is not defined for impulses

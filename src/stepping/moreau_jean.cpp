@@ -27,14 +27,45 @@ namespace rubdyn {
 
 namespace {
 
+/// N: the model's dofs, fixed (a fast path) or Eigen::Dynamic (simplified_newton.hpp).
+template <int N>
 class MoreauJean final : public Stepper {
+  using V = detail::SVec<N>;
+  using M = detail::SMat<N>;
+
  public:
   MoreauJean(const LagrangianModel& m, const FixedStepOptions& o)
       : m_(m),
-        law_(m.contact_law()),
+        n_(m.num_dofs()),
+        law_(m.contact_law(0)),
         o_(o),
         project_(o.scheme == FixedStepScheme::MoreauJeanProjected),
-        newton_(50) {}
+        newton_(n_, 50),
+        q_(V::Zero(n_)),
+        v_(V::Zero(n_)),
+        v_prev_(V::Zero(n_)),
+        M_(n_, n_),
+        dfdq_(n_, n_),
+        dfdv_(n_, n_),
+        dMa_(n_, n_),
+        Mt_(n_, n_),
+        X_(n_, 1),
+        fi_(V::Zero(n_)),
+        f_(V::Zero(n_)),
+        v_it_(V::Zero(n_)),
+        q_it_(V::Zero(n_)),
+        qe_(V::Zero(n_)),
+        dv_(V::Zero(n_)),
+        Phi_(V::Zero(n_)),
+        vfree_(V::Zero(n_)),
+        vn_(V::Zero(n_)),
+        change_(V::Zero(n_)),
+        xN_(V::Zero(n_)),
+        xT_(V::Zero(n_)),
+        WN_(V::Zero(n_)),
+        WT_(V::Zero(n_)),
+        ci_(n_),
+        kin_(n_) {}
 
   std::string_view name() const override { return project_ ? "mj-proj" : "mj"; }
   std::string options_json() const override {
@@ -46,7 +77,7 @@ class MoreauJean final : public Stepper {
                        o_.eta);
   }
 
-  void start(double, const Vec7& q0, const Vec7& v0) override {
+  void start(double, const Vec& q0, const Vec& v0) override {
     q_ = q0;
     v_ = v_prev_ = v0;
     prev_impulse_free_ = false;
@@ -57,63 +88,77 @@ class MoreauJean final : public Stepper {
 
  private:
   const LagrangianModel& m_;
+  const int n_;
   const ContactLaw law_;
   const FixedStepOptions o_;
   const bool project_;
-  detail::SimplifiedNewton newton_;
-  Vec7 q_ = Vec7::Zero(), v_ = Vec7::Zero();
-  Vec7 v_prev_ = Vec7::Zero();      // v_{i-1}, for the predictor
+  detail::SimplifiedNewton<N> newton_;
+  V q_, v_;
+  V v_prev_;                        // v_{i-1}, for the predictor
   bool prev_impulse_free_ = false;  // the last step had no impulse (and exists)
   long index_ = 0;
+  // workspaces
+  M M_, dfdq_, dfdv_, dMa_, Mt_;
+  Mat X_;  // (n x 1) the projection direction, solved with the model's mass solve
+  V fi_, f_, v_it_, q_it_, qe_, dv_, Phi_, vfree_, vn_, change_, xN_, xT_, WN_, WT_;
+  ContactKinematics ci_, kin_;
 };
 
-StepOutcome MoreauJean::step(double t, StepReport& r, std::string& message) {
+template <int N>
+StepOutcome MoreauJean<N>::step(double t, StepReport& r, std::string& message) {
   const double h = o_.h, th = o_.theta, eta = o_.eta;
-  Vec7 fi;
-  m_.smooth_forces(t, q_, v_, fi);
-  const ContactKinematics ci = m_.contact(q_, v_);
+  m_.smooth_forces(t, q_, v_, fi_);
+  m_.compute_contact(0, t, q_, v_, ci_);
+  const ContactKinematics& ci = ci_;
   const bool active = ci.normal_defined && ci.d_N + 0.5 * h * ci.v_N <= 0.0;
+  // W_N, W_T at q_i in the stepper's vectors (fixed-size on the fast path)
+  V& WN = WN_;
+  V& WT = WT_;
+  WN = ci.W_N;
+  WT = ci.W_T;
   // The predictor extrapolates the last acceleration unless the last step had an impulse.
-  Vec7 v = v_;
+  V& v = v_it_;
+  v = v_;
   if (prev_impulse_free_) v += v_ - v_prev_;
-  Mat7 M, dfdq, dfdv, dMa;
-  Vec7 f;
   newton_.begin_step();
-  Vec7 xN = Vec7::Zero(), xT = Vec7::Zero();
   double A_NN = 0, A_NT = 0, A_TT = 0;
   auto delassus = [&] {  // W^T Mt^{-1} W with the current iteration matrix
-    const Mat7& Li = newton_.inverse();
-    xN = Li * ci.W_N;
-    xT = Li * ci.W_T;
-    A_NN = ci.W_N.dot(xN);
-    A_NT = ci.W_N.dot(xT);
-    A_TT = ci.W_T.dot(xT);
+    newton_.apply_inverse(WN, xN_);
+    newton_.apply_inverse(WT, xT_);
+    A_NN = WN.dot(xN_);
+    A_NT = WN.dot(xT_);
+    A_TT = WT.dot(xT_);
   };
   if (!newton_.needs_matrix() && active) delassus();
   double rN = 0.0, rT = 0.0;
   Phase ph = Phase::Free;
-  r = StepReport{};
+  r.reset();
   for (;;) {
-    const Vec7 q = q_ + h * ((1.0 - th) * v_ + th * v);
-    const Vec7 qe = (1.0 - eta) * q_ + eta * q;
-    m_.mass_matrix(qe, M);
-    m_.smooth_forces(t + h, q, v, f);
-    const Vec7 Phi = M * (v - v_) - h * ((1.0 - th) * fi + th * f);
+    q_it_ = q_ + h * ((1.0 - th) * v_ + th * v);
+    qe_ = (1.0 - eta) * q_ + eta * q_it_;
+    m_.smooth_forces(t + h, q_it_, v, f_);
+    dv_ = v - v_;
+    m_.mass_product(qe_, dv_, Phi_);  // M(q_{i+eta}) (v - v_i), structured
+    Phi_ -= h * ((1.0 - th) * fi_ + th * f_);
     if (newton_.needs_matrix()) {
-      m_.smooth_force_jacobians(t + h, q, v, dfdq, dfdv);
-      m_.mass_matrix_product_jacobian(qe, v - v_, dMa);
-      newton_.set_matrix(M + eta * h * th * dMa - h * th * (dfdv + h * th * dfdq));
+      m_.mass_matrix(qe_, M_);
+      m_.smooth_force_jacobians(t + h, q_it_, v, dfdq_, dfdv_);
+      m_.mass_matrix_product_jacobian(qe_, dv_, dMa_);
+      Mt_ = M_ + eta * h * th * dMa_ - h * th * (dfdv_ + h * th * dfdq_);
+      newton_.set_matrix(Mt_);
       if (active) delassus();
     }
-    const Vec7 vfree = v - newton_.inverse() * Phi;
-    Vec7 vn = vfree;
+    newton_.apply_inverse(Phi_, vfree_);
+    vfree_ = v - vfree_;
+    V& vn = vn_;
+    vn = vfree_;
     rN = rT = 0.0;
     ph = Phase::Free;
     if (active) {
       // the velocity-level Coulomb-Signorini problem, band: round-off on the velocities
       const LocalSolution sol = solve_coulomb_signorini(
-          make_local_problem(A_NN, A_NT, A_TT, ci.W_N.dot(vfree) + law_.e_n * ci.v_N,
-                             ci.W_T.dot(vfree) + law_.e_t * ci.v_t, law_.mu));
+          make_local_problem(A_NN, A_NT, A_TT, WN.dot(vfree_) + ci.b_N + law_.e_n * ci.v_N,
+                             WT.dot(vfree_) + ci.b_T + law_.e_t * ci.v_t, law_.mu));
       if (!sol.ok()) {
         message = fmt::format(
             "mj: the contact problem has no solution at t = {:.17g} "
@@ -125,9 +170,9 @@ StepOutcome MoreauJean::step(double t, StepReport& r, std::string& message) {
       rN = sol.r_N;
       rT = sol.r_T;
       ph = sol.phase;
-      vn = vfree + xN * rN + xT * rT;
+      vn = vfree_ + xN_ * rN + xT_ * rT;
     }
-    const Vec7 change = vn - v;
+    change_ = vn - v;
     v = vn;
     ++r.newton_iters;
     if (!v.allFinite()) {
@@ -136,26 +181,24 @@ StepOutcome MoreauJean::step(double t, StepReport& r, std::string& message) {
     }
     // scaled change: 1e-14 relative plus 1e-15 m/s (or rad/s)
     const auto next =
-        newton_.after((change.array().abs() / (1e-14 * v.array().abs() + 1e-15)).maxCoeff());
-    if (next == detail::SimplifiedNewton::Next::Converged) break;
-    if (next == detail::SimplifiedNewton::Next::Failed) {
+        newton_.after((change_.array().abs() / (1e-14 * v.array().abs() + 1e-15)).maxCoeff());
+    if (next == detail::SimplifiedNewton<N>::Next::Converged) break;
+    if (next == detail::SimplifiedNewton<N>::Next::Failed) {
       message = fmt::format("mj: Newton did not converge in {} iterations at t = {:.17g}",
                             newton_.max_iterations(), t);
       return StepOutcome::NewtonFailed;
     }
   }
-  Vec7 q = q_ + h * ((1.0 - th) * v_ + th * v);
+  V& q = q_it_;
+  q = q_ + h * ((1.0 - th) * v_ + th * v);
   if (project_) {
     for (int k = 0; k < 3; ++k) {
-      const ContactKinematics c = m_.contact(q, v);
+      m_.compute_contact(0, t + h, q, v, kin_);
+      const ContactKinematics& c = kin_;
       if (!c.normal_defined || c.d_N >= 0.0) break;
-      Vec7 x = c.W_N;
-      if (o_.project_with_mass) {
-        Mat7 Mq;
-        m_.mass_matrix(q, Mq);
-        x = Mq.ldlt().solve(c.W_N);
-      }
-      q += x * (-c.d_N / c.W_N.dot(x));
+      X_.col(0) = c.W_N;
+      if (o_.project_with_mass) m_.solve_mass(q, X_);
+      q += X_.col(0) * (-c.d_N / c.W_N.dot(X_.col(0)));
     }
   }
   if (!q.allFinite() || !v.allFinite()) {
@@ -164,8 +207,8 @@ StepOutcome MoreauJean::step(double t, StepReport& r, std::string& message) {
   }
   // work of the impulse with the mid-step velocity: r . W^T (v_i + v_{i+1}) / 2
   if (rN != 0.0 || rT != 0.0) {
-    const Vec7 vmid = 0.5 * (v_ + v);
-    r.contact_work = rN * ci.W_N.dot(vmid) + rT * ci.W_T.dot(vmid);
+    dv_ = 0.5 * (v_ + v);
+    r.contact_work = rN * WN.dot(dv_) + rT * WT.dot(dv_);
   }
   v_prev_ = v_;
   q_ = q;
@@ -186,7 +229,8 @@ StepOutcome MoreauJean::step(double t, StepReport& r, std::string& message) {
 }  // namespace
 
 std::unique_ptr<Stepper> make_moreau_jean(const LagrangianModel& m, const FixedStepOptions& opt) {
-  return std::make_unique<MoreauJean>(m, opt);
+  if (m.num_dofs() == 7) return std::make_unique<MoreauJean<7>>(m, opt);  // the rigid rotor
+  return std::make_unique<MoreauJean<Eigen::Dynamic>>(m, opt);
 }
 
 }  // namespace rubdyn

@@ -7,14 +7,76 @@
 // (norm <= 1), when the estimated remaining error r / (1 - r) times the last change is (r the
 // contraction ratio), or when round-off is reached (r >= 0.5 after 4 iterations).
 #include <Eigen/LU>
+#include <cmath>
 
 #include "rubdyn/core/types.hpp"
 
 namespace rubdyn::detail {
 
+/// Vectors and matrices of a stepper for a model of N dofs: fixed-size for the sizes that have
+/// a fast path (the rigid rotor's 7), Eigen::Dynamic otherwise. Fixed sizes are unrolled by the
+/// compiler; measured on the reference case, a dynamic mj step costs 1.6x a fixed one (vector
+/// operations of runtime size 7 are loops with their overhead).
+template <int N>
+using SVec = Eigen::Matrix<double, N, 1>;
+template <int N>
+using SMat = Eigen::Matrix<double, N, N>;
+
+/// y = A x. Fixed sizes: Eigen's unrolled product. Dynamic sizes: a plain loop, column by column
+/// (each y_i summed in column order): for n = 7 as fast as the fixed product and twice as fast
+/// as Eigen's dynamic one, which calls a general kernel (measured: 8.6, 9.2, 15.9 ns).
+template <int N>
+inline void mat_vec(const SMat<N>& A, const SVec<N>& x, SVec<N>& y) {
+  if constexpr (N != Eigen::Dynamic) {
+    y.noalias() = A * x;
+  } else {
+    const Eigen::Index n = A.rows(), m = A.cols();
+    const double* a = A.data();
+    const double* xd = x.data();
+    double* yd = y.data();
+    for (Eigen::Index i = 0; i < n; ++i) yd[i] = a[i] * xd[0];
+    for (Eigen::Index j = 1; j < m; ++j) {
+      const double* col = a + j * n;
+      const double xj = xd[j];
+      for (Eigen::Index i = 0; i < n; ++i) yd[i] += col[i] * xj;
+    }
+  }
+}
+
+/// inv = J^{-1} by Gauss-Jordan elimination with partial pivoting, in place in the workspace
+/// `a` (a copy of J; both sized n x n): Eigen's dynamic-size LU and inverse allocate
+/// temporaries, this allocates nothing. Returns false for a singular J.
+inline bool invert_in_place(Mat& a, Mat& inv) {
+  const Eigen::Index n = a.rows();
+  inv.setIdentity();
+  for (Eigen::Index k = 0; k < n; ++k) {
+    Eigen::Index p = k;
+    for (Eigen::Index i = k + 1; i < n; ++i)
+      if (std::abs(a(i, k)) > std::abs(a(p, k))) p = i;
+    if (a(p, k) == 0.0) return false;
+    if (p != k) {
+      a.row(p).swap(a.row(k));
+      inv.row(p).swap(inv.row(k));
+    }
+    const double d = 1.0 / a(k, k);
+    a.row(k) *= d;
+    inv.row(k) *= d;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (i == k || a(i, k) == 0.0) continue;
+      const double f = a(i, k);
+      a.row(i) -= f * a.row(k);
+      inv.row(i) -= f * inv.row(k);
+    }
+  }
+  return true;
+}
+
+template <int N>
 class SimplifiedNewton {
  public:
-  explicit SimplifiedNewton(int max_iterations) : max_(max_iterations) {}
+  /// For n unknowns (n = N for a fixed size; the workspace is sized here).
+  SimplifiedNewton(int n, int max_iterations)
+      : max_(max_iterations), inv_(SMat<N>::Zero(n, n)), lu_(n), work_(n, n) {}
 
   /// Before the first iteration of a step.
   void begin_step() {
@@ -24,12 +86,21 @@ class SimplifiedNewton {
   }
   /// True when the iteration matrix must be set before the next iteration.
   bool needs_matrix() const { return !fresh_; }
-  void set_matrix(const Mat7& J) {
-    inv_ = J.partialPivLu().inverse();
+  void set_matrix(const SMat<N>& J) {
+    if constexpr (N != Eigen::Dynamic) {
+      lu_.compute(J);
+      inv_ = lu_.inverse();
+    } else {
+      work_ = J;
+      // a singular J: NaN, so that the next iterate is non-finite and the step says so
+      if (!invert_in_place(work_, inv_)) inv_.setConstant(std::nan(""));
+    }
     valid_ = fresh_ = true;
     age_ = 0;
   }
-  const Mat7& inverse() const { return inv_; }
+  const SMat<N>& inverse() const { return inv_; }
+  /// y = J^{-1} x with the kept inverse.
+  void apply_inverse(const SVec<N>& x, SVec<N>& y) const { mat_vec<N>(inv_, x, y); }
 
   enum class Next { Iterate, Converged, Failed };
   /// After an iteration whose change has the scaled norm `norm` (1 = the tolerance).
@@ -50,7 +121,9 @@ class SimplifiedNewton {
 
  private:
   int max_;
-  Mat7 inv_ = Mat7::Zero();
+  SMat<N> inv_;
+  Eigen::PartialPivLU<SMat<N>> lu_;  // fixed sizes
+  Mat work_;                         // dynamic sizes: the elimination's workspace
   bool valid_ = false, fresh_ = false;
   int age_ = 0, it_ = 0;
   double prev_ = 0.0;

@@ -14,7 +14,7 @@ namespace {
 struct Scene {
   const char* name;
   RotorStatorParams p;
-  MechanicalState s0;
+  MechanicalState s0 = MechanicalState(RotorStatorModel::kDofs);
   double t_end;
 };
 
@@ -51,7 +51,7 @@ TEST_CASE("Starting on the stator with a velocity into it: an impact at t = 0, t
   // yet (NaN), and CVODE refused the next phase.
   std::vector<Scene> scenes;
   auto touching = [](const char* name, double vy, double mu, double e_n, bool along_x) {
-    Scene sc{name, {}, {}, 0.02};
+    Scene sc{name, {}, MechanicalState(RotorStatorModel::kDofs), 0.02};
     sc.p.contact.mu = mu;
     sc.p.contact.e_n = e_n;
     sc.s0.v[TH] = 2000.0;
@@ -83,7 +83,7 @@ TEST_CASE("A rotor at rest falls onto the stator and settles: no loop at the lif
   // slip) 20 times at one instant.
   std::vector<Scene> scenes;
   auto at_rest = [](const char* name, double mu, double e_n, bool damping) {
-    Scene sc{name, {}, {}, 0.1};
+    Scene sc{name, {}, MechanicalState(RotorStatorModel::kDofs), 0.1};
     sc.p.contact.mu = mu;
     sc.p.contact.e_n = e_n;
     sc.p.loads.torque = 0.0;
@@ -109,7 +109,7 @@ TEST_CASE("A rotor at rest falls onto the stator and settles: no loop at the lif
 
 TEST_CASE("A very stiff stator (k_s = 1e10 N/m): lift-offs end the slide, no slip -> slip loop",
           "[events][rotor][regression]") {
-  Scene sc{"k_s = 1e10", {}, {}, 0.03};
+  Scene sc{"k_s = 1e10", {}, MechanicalState(RotorStatorModel::kDofs), 0.03};
   sc.p.stator.k = 1e10;
   sc.s0.v[TH] = 2000.0;
   MemorySink sink;

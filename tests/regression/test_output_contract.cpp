@@ -43,7 +43,7 @@ using Outcome = CliOutcome;
 
 TEST_CASE("Contract: fixed-step options are checked at the library boundary", "[contract]") {
   const RotorStatorModel model(RotorStatorParams{});
-  MechanicalState s0;
+  MechanicalState s0(RotorStatorModel::kDofs);
   s0.v[TH] = 2000.0;
   FixedStepOptions o;
   MemorySink sink;
@@ -481,7 +481,7 @@ TEST_CASE("Contract: a run restarts exactly from a sample of another run", "[con
   REQUIRE(at != nullptr);
   CHECK(rb.samples.front().t == at->t);
   CHECK(rb.samples.front().q == at->q);
-  for (int i = 0; i < kNumDofs; ++i)
+  for (int i = 0; i < RotorStatorModel::kDofs; ++i)
     CHECK(std::abs(rb.samples.front().v[i] - at->v[i]) <= 1e-15 * std::abs(at->v[i]));
   CHECK(rb.spec.run.t_start == at->t);
   // and it goes on like the original: the integrator's history is new, so the two differ at

@@ -54,7 +54,7 @@ TEST_CASE("Stress scenes (short): no NaN, typed terminations, invariants", "[str
   };
   for (const auto& sc : scenes) {
     RotorStatorParams p;
-    MechanicalState s0;
+    MechanicalState s0(RotorStatorModel::kDofs);
     s0.v[TH] = 2000.0;
     sc.set(p, s0);
     const RotorStatorModel model(p);

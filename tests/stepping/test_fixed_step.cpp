@@ -155,14 +155,14 @@ TEST_CASE("Block on a belt: every scheme converges to the stick-slip solution", 
 TEST_CASE("Position-level schemes keep d_N >= -1e-9 g0 - MJ satisfies velocity Signorini",
           "[stepping]") {
   const RotorStatorModel model(RotorStatorParams{});
-  MechanicalState s0;
+  MechanicalState s0(RotorStatorModel::kDofs);
   s0.v[TH] = 2000.0;
   const double g0 = model.params().stator.gap;
   for (auto scheme : {FixedStepScheme::CarpOneVC, FixedStepScheme::CarpQN,
                       FixedStepScheme::MoreauJeanProjected}) {
     const MemorySink s = run(model, s0, 0.03, scheme, 1e-6);
     double min_dN = 1e300;
-    for (const auto& x : s.samples) min_dN = std::min(min_dN, x.d_N);
+    for (const auto& x : s.samples) min_dN = std::min(min_dN, x.contacts[0].d_N);
     INFO(to_string(scheme) << " min d_N " << min_dN);
     CHECK(min_dN >= -1e-9 * g0);
     CHECK(s.summary.events[static_cast<int>(EventKind::Impact)] >= 1);
@@ -176,11 +176,11 @@ TEST_CASE("Position-level schemes keep d_N >= -1e-9 g0 - MJ satisfies velocity S
   for (std::size_t i = 1; i < s.samples.size(); ++i) {
     const Sample& a = s.samples[i - 1];
     const Sample& b = s.samples[i];
-    CHECK(b.F_N >= 0.0);
-    if (b.F_N > 0.0) {
+    CHECK(b.contacts[0].F_N >= 0.0);
+    if (b.contacts[0].F_N > 0.0) {
       ++active;
       // velocities ~ 4 m/s: round-off ~1e-15
-      CHECK(std::abs(b.v_N + 0.5 * a.v_N) < 1e-12);
+      CHECK(std::abs(b.contacts[0].v_N + 0.5 * a.contacts[0].v_N) < 1e-12);
     }
   }
   CHECK(active > 5);
@@ -191,7 +191,7 @@ TEST_CASE("mj-proj moves positions along M^-1 W_N (mass) or along W_N (identity)
   // projected run differs from the plain one by the projection alone, dq = alpha M(q)^-1 W_N
   // (kinetic metric) or dq = alpha W_N (Euclidean metric, Siconos' choice).
   const RotorStatorModel model(RotorStatorParams{});
-  MechanicalState s0;
+  MechanicalState s0(RotorStatorModel::kDofs);
   s0.v[TH] = 2000.0;
   for (bool with_mass : {true, false}) {
     FixedStepOptions o;
@@ -205,26 +205,26 @@ TEST_CASE("mj-proj moves positions along M^-1 W_N (mass) or along W_N (identity)
     REQUIRE(run_fixed_step(model, s0, 0.0065, o, proj).complete());
     REQUIRE(plain.samples.size() == proj.samples.size());
     std::size_t k = 0;
-    while (k < plain.samples.size() && plain.samples[k].d_N >= 0.0) {
+    while (k < plain.samples.size() && plain.samples[k].contacts[0].d_N >= 0.0) {
       REQUIRE(plain.samples[k].q == proj.samples[k].q);  // bitwise: the same operations
       ++k;
     }
     REQUIRE(k < plain.samples.size());  // an impact happens before 6.5 ms
-    const Vec7 dq = proj.samples[k].q - plain.samples[k].q;
-    const ContactKinematics c = model.contact(proj.samples[k].q, proj.samples[k].v);
-    Mat7 M;
+    const Vec dq = proj.samples[k].q - plain.samples[k].q;
+    const ContactKinematics c = model.contact(0, 0.0, proj.samples[k].q, proj.samples[k].v);
+    Mat M(7, 7);
     model.mass_matrix(proj.samples[k].q, M);
     // the direction: dq (identity) or M dq (mass) is parallel to W_N (taken at the projected
     // q; the projection iterates, so the last direction dominates: the first correction's
     // residual is second order in the penetration, ~1e-9 m here, so 1e-6 relative is ample)
-    const Vec7 dir = with_mass ? Vec7(M * dq) : dq;
+    const Vec dir = with_mass ? Vec(M * dq) : dq;
     const double along = dir.dot(c.W_N) / c.W_N.squaredNorm();
     INFO((with_mass ? "mass" : "identity")
-         << ": d_N before " << plain.samples[k].d_N << ", dq = " << dq.transpose());
-    CHECK(plain.samples[k].d_N < 0.0);
+         << ": d_N before " << plain.samples[k].contacts[0].d_N << ", dq = " << dq.transpose());
+    CHECK(plain.samples[k].contacts[0].d_N < 0.0);
     // projected onto d_N >= 0 (the loop stops when d_N >= 0; d_N's own round-off is
     // ~1e-16 |s| ~ 2e-20 m, far below this bound)
-    CHECK(proj.samples[k].d_N >= -1e-15 * model.params().stator.gap);
+    CHECK(proj.samples[k].contacts[0].d_N >= -1e-15 * model.params().stator.gap);
     CHECK((dir - along * c.W_N).norm() <= 1e-6 * std::abs(along) * c.W_N.norm());
     if (!with_mass) {
       // W_N has no bearing or spin entry: those coordinates are not moved
@@ -240,7 +240,7 @@ TEST_CASE("mj-proj moves positions along M^-1 W_N (mass) or along W_N (identity)
 TEST_CASE("carp-qn and carp-onevc agree to O(h) on the first 30 ms of the reference case",
           "[stepping]") {
   const RotorStatorModel model(RotorStatorParams{});
-  MechanicalState s0;
+  MechanicalState s0(RotorStatorModel::kDofs);
   s0.v[TH] = 2000.0;
   double diff[2];
   double h = 2e-6;
@@ -266,7 +266,7 @@ TEST_CASE("Carpenter keeps converging at h = 1e-7 (no round-off floor from theta
   // (theta_{i+1} - theta_{i-1}) / 2h with theta ~ 60 rad would carry a round-off of
   // ~1e-14 / h ~ 1e-7 rad/s at h = 1e-7 and stall; increments keep it converging.
   const RotorStatorModel model(RotorStatorParams{});
-  MechanicalState s0;
+  MechanicalState s0(RotorStatorModel::kDofs);
   s0.v[TH] = 2000.0;
   const double T = 0.03;
   MemorySink ref;
@@ -296,7 +296,7 @@ TEST_CASE("Fixed-step runs report progress at every output sample", "[stepping]"
   // function sees each written sample once, in order, with the sample's spin speed and phase and
   // the events logged so far (the first impact is at about 6 ms)
   const RotorStatorModel model(RotorStatorParams{});
-  MechanicalState s0;
+  MechanicalState s0(RotorStatorModel::kDofs);
   s0.v[TH] = 2000.0;
   for (auto scheme : kAll) {
     MemorySink sink;
@@ -315,7 +315,7 @@ TEST_CASE("Fixed-step runs report progress at every output sample", "[stepping]"
       const Sample& x = sink.samples[i];
       CHECK(std::get<0>(calls[i]) == x.t);
       CHECK(std::get<2>(calls[i]) == x.v[TH]);
-      CHECK(std::get<3>(calls[i]) == x.phase);
+      CHECK(std::get<3>(calls[i]) == x.contacts[0].phase);
     }
     const long total = std::accumulate(s.events.begin(), s.events.end(), 0L);
     CHECK(std::get<1>(calls.back()) == total);

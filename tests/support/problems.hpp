@@ -1,7 +1,6 @@
 #pragma once
-// Reusable problems with exact solutions, as LagrangianModels (7 dofs; unused dofs have unit mass,
-// no force, and stay at rest). Every solver is tested on them through the same interface as the
-// rotor-stator model.
+// Reusable problems with exact solutions, as LagrangianModels of their own size (a point in the
+// plane: 2 dofs). Every solver is tested on them through the same interface as the rotor models.
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -10,38 +9,37 @@
 
 namespace rubdyn::testing {
 
-/// Minimal coordinates of the plane contact y = q[1] >= 0 with tangent q[0]: slip drops q[1]
-/// (p = q without dof 1), stick also fixes q[0] at its value where stick began (the anchor).
+/// Minimal coordinates of the plane contact y = q[1] >= 0 with tangent q[0], for a model of n
+/// dofs: slip drops q[1] (p = q without dof 1), stick also fixes q[0] at its value where stick
+/// began (the anchor). For the 2-dof problems below a stick phase has no coordinate left.
 class PlaneChart final : public ContactChart {
  public:
-  int dim(ChartMode mode) const override { return mode == ChartMode::Slip ? 6 : 5; }
-  void chart(ChartMode mode, const Vec7& q, const Vec7& v, Vec7& anchor, Vec7& p,
-             Vec7& pd) const override {
-    anchor.setZero();
+  explicit PlaneChart(int n = 2) : n_(n) {}
+  int dim(ChartMode mode) const override { return mode == ChartMode::Slip ? n_ - 1 : n_ - 2; }
+  void chart(ChartMode mode, VecIn q, VecIn v, ChartAnchor& anchor, VecOut p,
+             VecOut pd) const override {
+    anchor.fill(0.0);
     anchor[0] = q[0];
-    p.setZero();
-    pd.setZero();
-    for (int i = 0, k = 0; i < kNumDofs; ++i) {
+    for (int i = 0, k = 0; i < n_; ++i) {
       if (!coordinate(mode, i)) continue;
       p[k] = q[i];
       pd[k++] = v[i];
     }
   }
-  void embed(ChartMode mode, const Vec7& anchor, const Vec7& p, const Vec7& pd, Vec7& q,
-             Vec7& v) const override {
+  void embed(ChartMode mode, const ChartAnchor& anchor, VecIn p, VecIn pd, VecOut q,
+             VecOut v) const override {
     q.setZero();
     v.setZero();
     if (mode == ChartMode::Stick) q[0] = anchor[0];
-    for (int i = 0, k = 0; i < kNumDofs; ++i) {
+    for (int i = 0, k = 0; i < n_; ++i) {
       if (!coordinate(mode, i)) continue;
       q[i] = p[k];
       v[i] = pd[k++];
     }
   }
-  void reduce(ChartMode mode, const Vec7&, const Vec7&, const Vec7&, const Vec7&, const Vec7& a,
-              Vec7& pdd) const override {
-    pdd.setZero();
-    for (int i = 0, k = 0; i < kNumDofs; ++i) {
+  void reduce(ChartMode mode, const ChartAnchor&, VecIn, VecIn, VecIn, VecIn a,
+              VecOut pdd) const override {
+    for (int i = 0, k = 0; i < n_; ++i) {
       if (!coordinate(mode, i)) continue;
       pdd[k++] = a[i];
     }
@@ -53,33 +51,45 @@ class PlaneChart final : public ContactChart {
   static bool coordinate(ChartMode mode, int i) {
     return i != 1 && (i != 0 || mode == ChartMode::Slip);
   }
+  int n_;
 };
 
-/// Base: identity mass, no contact forces; the contact is a plane on dof 1 (y >= 0) with the
-/// tangent along dof 0 unless a problem overrides contact() (and then contact_chart(), which
-/// describes that plane).
-class PaddedModel : public LagrangianModel {
+/// Base of the test problems: a point of mass m in the plane, q = (x, y), on the ground y >= 0
+/// (the contact: normal dof 1, tangent dof 0, unless a problem overrides compute_contact() and
+/// then contact_chart(), which describes that plane).
+class PlaneModel : public LagrangianModel {
  public:
-  explicit PaddedModel(ContactLaw law, double gap_scale) : law_(law), gap_scale_(gap_scale) {}
-  void mass_matrix(const Vec7& /*q*/, Mat7& M) const override {
-    M.setIdentity();
+  PlaneModel(ContactLaw law, double gap_scale) : law_(law), gap_scale_(gap_scale) {}
+  int num_dofs() const override { return 2; }
+  const std::vector<Coordinate>& coordinates() const override {
+    static const std::vector<Coordinate> c = {
+        {"x", "vx", "vx", "m", "along the ground", CoordinateRole::Other, 0},
+        {"y", "vy", "vy", "m", "height above the ground", CoordinateRole::Other, 0}};
+    return c;
+  }
+  void mass_matrix(VecIn /*q*/, MatOut M) const override {
+    M.setZero();
     M(0, 0) = M(1, 1) = mass_;
   }
-  void mass_matrix_product_jacobian(const Vec7&, const Vec7&, Mat7& J) const override {
-    J.setZero();
-  }
-  ContactKinematics contact(const Vec7& q, const Vec7& v) const override {
-    ContactKinematics c;
+  void mass_product(VecIn /*q*/, VecIn x, VecOut y) const override { y = mass_ * x; }
+  void solve_mass(VecIn /*q*/, MatOut B) const override { B /= mass_; }
+  void mass_matrix_product_jacobian(VecIn, VecIn, MatOut J) const override { J.setZero(); }
+  void compute_contact(int, double, VecIn q, VecIn v, ContactKinematics& c) const override {
     c.d_N = q[1];
+    c.W_N.setZero();
+    c.W_T.setZero();
     c.W_N[1] = 1.0;
     c.W_T[0] = 1.0;
     c.v_N = v[1];
     c.v_t = v[0];
-    return c;
+    c.b_N = c.b_T = c.wdot_N = c.wdot_T = 0.0;
+    c.normal_defined = true;
   }
-  double gap_scale() const override { return gap_scale_; }
-  const ContactLaw& contact_law() const override { return law_; }
+  double kinetic_energy(VecIn, VecIn v) const override { return 0.5 * mass_ * v.squaredNorm(); }
+  double gap_scale(int = 0) const override { return gap_scale_; }
+  const ContactLaw& contact_law(int = 0) const override { return law_; }
   const ContactChart* contact_chart() const override { return &chart_; }
+  MechanicalState state() const { return MechanicalState(num_dofs()); }
 
  protected:
   PlaneChart chart_;
@@ -90,24 +100,23 @@ class PaddedModel : public LagrangianModel {
 
 /// Undamped harmonic oscillator on dof 0: x'' = -w^2 x; the contact (y >= 0 on dof 1, y = 1
 /// at rest) never closes. Exact: x = x0 cos(w t) + v0/w sin(w t). Energy is conserved.
-class SpringMass final : public PaddedModel {
+class SpringMass final : public PlaneModel {
  public:
-  explicit SpringMass(double w = 2.0 * std::numbers::pi) : PaddedModel({}, 1.0), w_(w) {}
+  explicit SpringMass(double w = 2.0 * std::numbers::pi) : PlaneModel({}, 1.0), w_(w) {}
   std::string_view name() const override { return "spring-mass"; }
-  void smooth_forces(double, const Vec7& q, const Vec7&, Vec7& f) const override {
+  void smooth_forces(double, VecIn q, VecIn, VecOut f) const override {
     f.setZero();
     f[0] = -w_ * w_ * q[0];
   }
-  void smooth_force_jacobians(double, const Vec7&, const Vec7&, Mat7& dfdq,
-                              Mat7& dfdv) const override {
+  void smooth_force_jacobians(double, VecIn, VecIn, MatOut dfdq, MatOut dfdv) const override {
     dfdq.setZero();
     dfdv.setZero();
     dfdq(0, 0) = -w_ * w_;
   }
-  double potential_energy(const Vec7& q) const override { return 0.5 * w_ * w_ * q[0] * q[0]; }
-  SmoothPower smooth_power(double, const Vec7&, const Vec7&) const override { return {}; }
+  double potential_energy(VecIn q) const override { return 0.5 * w_ * w_ * q[0] * q[0]; }
+  SmoothPower smooth_power(double, VecIn, VecIn) const override { return {}; }
   MechanicalState initial(double x0 = 1.0, double v0 = 0.0) const {
-    MechanicalState s;
+    MechanicalState s = state();
     s.q[0] = x0;
     s.q[1] = 1.0;
     s.v[0] = v0;
@@ -128,24 +137,23 @@ class SpringMass final : public PaddedModel {
 /// A ball dropped from height h0 at rest onto the ground y = 0 under gravity g, restitution e_n.
 /// Exact: first impact at t1 = sqrt(2 h0 / g) with speed V1 = g t1; the k-th flight after it lasts
 /// 2 e^k V1 / g; impacts accumulate at t_inf = t1 + 2 e V1 / (g (1 - e)).
-class BouncingBall final : public PaddedModel {
+class BouncingBall final : public PlaneModel {
  public:
   BouncingBall(double e_n, double h0 = 1.0, double g = 9.81)
-      : PaddedModel({0.0, e_n, 0.0}, h0), h0_(h0), g_(g) {}
+      : PlaneModel({0.0, e_n, 0.0}, h0), h0_(h0), g_(g) {}
   std::string_view name() const override { return "bouncing-ball"; }
-  void smooth_forces(double, const Vec7&, const Vec7&, Vec7& f) const override {
+  void smooth_forces(double, VecIn, VecIn, VecOut f) const override {
     f.setZero();
     f[1] = -mass_ * g_;
   }
-  void smooth_force_jacobians(double, const Vec7&, const Vec7&, Mat7& dfdq,
-                              Mat7& dfdv) const override {
+  void smooth_force_jacobians(double, VecIn, VecIn, MatOut dfdq, MatOut dfdv) const override {
     dfdq.setZero();
     dfdv.setZero();
   }
-  double potential_energy(const Vec7& q) const override { return mass_ * g_ * q[1]; }
-  SmoothPower smooth_power(double, const Vec7&, const Vec7&) const override { return {}; }
+  double potential_energy(VecIn q) const override { return mass_ * g_ * q[1]; }
+  SmoothPower smooth_power(double, VecIn, VecIn) const override { return {}; }
   MechanicalState initial() const {
-    MechanicalState s;
+    MechanicalState s = state();
     s.q[1] = h0_;
     return s;
   }
@@ -180,31 +188,30 @@ class BouncingBall final : public PaddedModel {
 /// with x1 = x_e (1 - cos(w t1)), then slip- again: x = x_e + v_b/w sin(w (t - t2)) in the lab,
 /// which touches the belt speed again tangentially at t2 + 2 pi / w (a degenerate point: tests
 /// stop before it).
-class BlockOnBelt final : public PaddedModel {
+class BlockOnBelt final : public PlaneModel {
  public:
   BlockOnBelt(double mu = 0.5, double k = 100.0, double m = 1.0, double v_b = 1.0, double g = 9.81)
-      : PaddedModel({mu, 0.0, 0.0}, 0.01), k_(k), v_b_(v_b), g_(g) {
+      : PlaneModel({mu, 0.0, 0.0}, 0.01), k_(k), v_b_(v_b), g_(g) {
     mass_ = m;
   }
   std::string_view name() const override { return "block-on-belt"; }
-  void smooth_forces(double t, const Vec7& q, const Vec7&, Vec7& f) const override {
+  void smooth_forces(double t, VecIn q, VecIn, VecOut f) const override {
     f.setZero();
     f[0] = -k_ * (q[0] + v_b_ * t);
     f[1] = -mass_ * g_;
   }
-  void smooth_force_jacobians(double, const Vec7&, const Vec7&, Mat7& dfdq,
-                              Mat7& dfdv) const override {
+  void smooth_force_jacobians(double, VecIn, VecIn, MatOut dfdq, MatOut dfdv) const override {
     dfdq.setZero();
     dfdv.setZero();
     dfdq(0, 0) = -k_;
   }
   /// Gravity only: the spring to the moving wall is a non-conservative applied load here.
-  double potential_energy(const Vec7& q) const override { return mass_ * g_ * q[1]; }
-  SmoothPower smooth_power(double t, const Vec7& q, const Vec7& v) const override {
+  double potential_energy(VecIn q) const override { return mass_ * g_ * q[1]; }
+  SmoothPower smooth_power(double t, VecIn q, VecIn v) const override {
     return {-k_ * (q[0] + v_b_ * t) * v[0], 0.0};
   }
   MechanicalState initial() const {
-    MechanicalState s;
+    MechanicalState s = state();
     s.v[0] = -v_b_;
     return s;
   }
@@ -229,24 +236,23 @@ class BlockOnBelt final : public PaddedModel {
   double k_, v_b_, g_;
 };
 
-/// Free fall on dof 1 above the plane y = 0 (PaddedModel's contact) with no spin coordinate,
+/// Free fall on dof 1 above the plane y = 0 (PlaneModel's contact) with no spin coordinate,
 /// claiming `contacts` contacts; its force turns NaN after t_poison (a model failing mid-run).
-class FreeFall final : public PaddedModel {
+class FreeFall final : public PlaneModel {
  public:
   explicit FreeFall(int contacts = 1, double t_poison = std::numeric_limits<double>::infinity())
-      : PaddedModel(ContactLaw{}, 1.0), contacts_(contacts), t_poison_(t_poison) {}
+      : PlaneModel(ContactLaw{}, 1.0), contacts_(contacts), t_poison_(t_poison) {}
   std::string_view name() const override { return "free fall"; }
-  void smooth_forces(double t, const Vec7&, const Vec7&, Vec7& f) const override {
+  void smooth_forces(double t, VecIn, VecIn, VecOut f) const override {
     f.setZero();
     f[1] = t > t_poison_ ? std::numeric_limits<double>::quiet_NaN() : -9.81;
   }
-  void smooth_force_jacobians(double, const Vec7&, const Vec7&, Mat7& dfdq,
-                              Mat7& dfdv) const override {
+  void smooth_force_jacobians(double, VecIn, VecIn, MatOut dfdq, MatOut dfdv) const override {
     dfdq.setZero();
     dfdv.setZero();
   }
-  double potential_energy(const Vec7& q) const override { return 9.81 * q[1]; }
-  SmoothPower smooth_power(double, const Vec7&, const Vec7&) const override { return {}; }
+  double potential_energy(VecIn q) const override { return 9.81 * q[1]; }
+  SmoothPower smooth_power(double, VecIn, VecIn) const override { return {}; }
   int contact_count() const override { return contacts_; }
 
  private:

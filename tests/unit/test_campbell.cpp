@@ -206,22 +206,25 @@ TEST_CASE("Campbell diagram: continuous curves, forward rise, backward fall", "[
     REQUIRE(d.labels_ok());
     CHECK(d.omega.front() == 0.0);
     CHECK(d.omega.back() == omega_max);
-    CHECK(d.zeta_1b.empty());
+    CHECK(d.zeta.empty());
+    REQUIRE(d.labels == std::vector<std::string>{"f1b", "f1f", "f2b", "f2f"});
+    const auto &f1b = d.column("f1b"), &f1f = d.column("f1f"), &f2b = d.column("f2b"),
+               &f2f = d.column("f2f");
     for (std::size_t i = 1; i < d.size(); ++i) {
       // gyroscopic stiffening of forward whirl, softening of backward whirl: strictly monotone
-      CHECK(d.f1f[i] > d.f1f[i - 1]);
-      CHECK(d.f2f[i] > d.f2f[i - 1]);
-      CHECK(d.f1b[i] < d.f1b[i - 1]);
-      CHECK(d.f2b[i] < d.f2b[i - 1]);
+      CHECK(f1f[i] > f1f[i - 1]);
+      CHECK(f2f[i] > f2f[i - 1]);
+      CHECK(f1b[i] < f1b[i - 1]);
+      CHECK(f2b[i] < f2b[i - 1]);
       if (i < 2) continue;
       // continuity: each curve's value is by far the nearest to the linear extrapolation of
       // its two previous points. A label swap between curves a and b at point i would put
       // curve b's value next to a's prediction and a's residual at the full gap (ratio >= 1);
       // a smooth curve on a 201-point grid leaves a curvature residual far below the gaps
       // (worst ratio measured: 5e-4 to omega_lim, 1.3e-2 to 50000 rad/s): 0.25.
-      const double y[4] = {d.f1b[i], d.f1f[i], d.f2b[i], d.f2f[i]};
-      const double x[4] = {d.f1b[i - 1], d.f1f[i - 1], d.f2b[i - 1], d.f2f[i - 1]};
-      const double w[4] = {d.f1b[i - 2], d.f1f[i - 2], d.f2b[i - 2], d.f2f[i - 2]};
+      const double y[4] = {f1b[i], f1f[i], f2b[i], f2f[i]};
+      const double x[4] = {f1b[i - 1], f1f[i - 1], f2b[i - 1], f2f[i - 1]};
+      const double w[4] = {f1b[i - 2], f1f[i - 2], f2b[i - 2], f2f[i - 2]};
       for (int a = 0; a < 4; ++a) {
         const double pred = 2 * x[a] - w[a];
         double others = 1e300;

@@ -18,7 +18,9 @@ struct ManifoldStates {
   double u() { return std::uniform_real_distribution<double>(-1.0, 1.0)(rng); }
   /// A state on the contact manifold of `mode`: the rotor centre on the clearance circle,
   /// v_N = 0, and v_t = 0 for stick.
-  void make(const RotorStatorModel& m, ChartMode mode, Vec7& q, Vec7& v) {
+  void make(const RotorStatorModel& m, ChartMode mode, Vec& q, Vec& v) {
+    q.resize(7);
+    v.resize(7);
     const double g0 = m.params().stator.gap, Rr = m.params().rotor.radius;
     const double phi = 3.0 * u(), th = 40.0 * u();
     q << 0.3 * g0 * u(), 0.3 * g0 * u(), 0, 0, th, 0.3 * g0 * u(), 0.3 * g0 * u();
@@ -40,23 +42,23 @@ TEST_CASE("Structured mass solve equals a dense factorisation of M(q)", "[model]
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (int trial = 0; trial < 200; ++trial) {
-    Vec7 q;
-    for (int i = 0; i < kNumDofs; ++i) q[i] = 4e-4 * u(rng);
+    Vec q(7);
+    for (int i = 0; i < 7; ++i) q[i] = 4e-4 * u(rng);
     q[TH] = 100.0 * u(rng);
-    Mat7x3 B;
-    for (int i = 0; i < kNumDofs; ++i)
+    Mat B(7, 3);
+    for (int i = 0; i < 7; ++i)
       for (int j = 0; j < 3; ++j) B(i, j) = 1e3 * u(rng);
-    Mat7 M;
+    Mat M(7, 7);
     model.mass_matrix(q, M);
-    const Mat7x3 X_ref = M.ldlt().solve(B);
-    Mat7x3 X = B;
-    model.solve_mass(q, X, 3);
+    const Mat X_ref = M.ldlt().solve(B);
+    Mat X = B;
+    model.solve_mass(q, X);
     // Both solves are backward stable; M is well conditioned (its entries span 1e-2 .. 5 kg), so
     // they agree to a few hundred ulps of the solution's size.
     CHECK((X - X_ref).norm() <= 1e-13 * X_ref.norm());
     // fewer columns: the others are left alone
-    Mat7x3 Y = B;
-    model.solve_mass(q, Y, 1);
+    Mat Y = B;
+    model.solve_mass(q, Y.leftCols(1));
     CHECK((Y.col(0) - X_ref.col(0)).norm() <= 1e-13 * X_ref.col(0).norm());
     CHECK(Y.col(1) == B.col(1));
   }
@@ -72,7 +74,9 @@ TEST_CASE("Contact chart: the embedding stays on the constraints and inverts the
     INFO((mode == ChartMode::Slip ? "slip" : "stick"));
     CHECK(chart.dim(mode) == (mode == ChartMode::Slip ? 6 : 5));
     for (int trial = 0; trial < 100; ++trial) {
-      Vec7 q, v, anchor, p, pd, q2, v2;
+      const int d = chart.dim(mode);
+      Vec q, v, p(d), pd(d), q2(7), v2(7);
+      ChartAnchor anchor;
       gen.make(model, mode, q, v);
       chart.chart(mode, q, v, anchor, p, pd);
       chart.embed(mode, anchor, p, pd, q2, v2);
@@ -85,7 +89,7 @@ TEST_CASE("Contact chart: the embedding stays on the constraints and inverts the
         pd[i] += (i == 2 && mode == ChartMode::Slip ? 100.0 : 0.05) * gen.u();
       }
       chart.embed(mode, anchor, p, pd, q2, v2);
-      const ContactKinematics c = model.contact(q2, v2);
+      const ContactKinematics c = model.contact(0, 0.0, q2, v2);
       // d_N = g0 - sqrt(sx^2 + sy^2) with sx, sy = g0 (cos, sin): a few ulps of g0
       CHECK(std::abs(c.d_N) <= 8 * 2.2e-16 * g0);
       CHECK(std::abs(c.v_N) <= 1e-15 * (1.0 + v2.head<4>().norm()));
@@ -106,25 +110,28 @@ TEST_CASE("Contact chart: v = J p' and a = J p'' + c by finite differences along
   for (ChartMode mode : {ChartMode::Slip, ChartMode::Stick}) {
     INFO((mode == ChartMode::Slip ? "slip" : "stick"));
     for (int trial = 0; trial < 50; ++trial) {
-      Vec7 q, v, anchor, p, pd, pdd = Vec7::Zero();
+      const int d = chart.dim(mode);
+      Vec q, v, p(d), pd(d), pdd = Vec::Zero(d);
+      ChartAnchor anchor;
       gen.make(model, mode, q, v);
       chart.chart(mode, q, v, anchor, p, pd);
-      for (int i = 0; i < chart.dim(mode); ++i) pdd[i] = 1e3 * gen.u();
-      auto at = [&](double t, Vec7& qt, Vec7& vt) {
-        chart.embed(mode, anchor, p + pd * t + 0.5 * pdd * t * t, pd + pdd * t, qt, vt);
+      for (int i = 0; i < d; ++i) pdd[i] = 1e3 * gen.u();
+      auto at = [&](double t, Vec& qt, Vec& vt) {
+        const Vec pt = p + pd * t + 0.5 * pdd * t * t, pdt = pd + pdd * t;
+        chart.embed(mode, anchor, pt, pdt, qt, vt);
       };
       // the fastest motion is the whirl, phi' up to 1e5 rad/s: h = 1e-9 s resolves it; central
       // differences then have truncation error O((phi' h)^2) ~ 1e-8 relative and round-off
       // error eps |q| / h ~ 1e-11 m/s on positions of O(g0)
       const double h = 1e-9;
-      Vec7 qm, vm, qp, vp, q0, v0;
+      Vec qm(7), vm(7), qp(7), vp(7), q0(7), v0(7);
       at(-h, qm, vm);
       at(h, qp, vp);
       at(0.0, q0, v0);
-      const Vec7 v_fd = (qp - qm) / (2 * h);
-      const Vec7 a_fd = (vp - vm) / (2 * h);
+      const Vec v_fd = (qp - qm) / (2 * h);
+      const Vec a_fd = (vp - vm) / (2 * h);
       CHECK((v_fd - v0).norm() <= 1e-7 * v0.norm());
-      Vec7 pdd_back;
+      Vec pdd_back(d);
       chart.reduce(mode, anchor, p, pd, q0, a_fd, pdd_back);
       CHECK((pdd_back - pdd).norm() <= 1e-5 * pdd.norm());
     }

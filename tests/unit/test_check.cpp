@@ -16,6 +16,12 @@
 #include "rubdyn/model/rotor_stator_model.hpp"
 
 using namespace rubdyn;
+
+namespace {
+// the rigid rotor's size, as fixed-size types (the model's arguments bind to them, no copies)
+using Vec7 = Eigen::Matrix<double, 7, 1>;
+using Mat7 = Eigen::Matrix<double, 7, 7>;
+}  // namespace
 namespace fs = std::filesystem;
 
 namespace {
@@ -81,19 +87,19 @@ TEST_CASE("The static equilibrium satisfies the model's equations of motion", "[
     const RotorStatorModel m(p);
     const DerivedQuantities d = compute_derived_quantities(p, 0.0, 1.0);
     REQUIRE(d.rests_on_stator);
-    const Vec7 v = Vec7::Zero();
-    Vec7 f;
+    const Vec v = Vec::Zero(7);
+    Vec f(7);
     m.smooth_forces(0.0, d.q_static, v, f);
     // without contact the rotor is not in equilibrium: row y_r is -nu m g (it must fall)
     CHECK(f[YR] == Approx(-d.nu * p.rotor.mass * p.loads.gravity).epsilon(1e-14));
-    const ContactKinematics c = m.contact(d.q_static, v);
+    const ContactKinematics c = m.contact(0, 0.0, d.q_static, v);
     REQUIRE(c.normal_defined);
     // closed contact, at the bottom of the clearance: d_N = 0 up to the rounding of
     // y_r = y_s - g0 (ulp of 2e-4 m ~ 3e-20 m)
     CHECK(std::abs(c.d_N) < 1e-18);
     CHECK(c.W_N[YR] == Approx(1.0).epsilon(1e-14));  // C_N of eq. 18: (y_s - y_r)/|sr| = 1
     CHECK(d.F_N >= 0.0);                             // Signorini: compressive
-    const Vec7 res = f + c.W_N * d.F_N;              // + W_T F_T with F_T = 0 (inside the cone)
+    const Vec res = f + c.W_N * d.F_N;               // + W_T F_T with F_T = 0 (inside the cone)
     // every row is a sum of terms of at most ~50 N (weights, spring forces, F_N): round-off
     // ~1e-14 N; 1e-11 N is a relative 2e-13 of the weight, far below any wrong sign or factor
     CHECK(res.cwiseAbs().maxCoeff() < 1e-11);
@@ -109,7 +115,8 @@ TEST_CASE("Statics without gravity and the outcomes of the free acceleration", "
   CHECK(d0.q_static.isZero(0.0));
   const RotorStatorModel m(p);
   Vec7 f;
-  m.smooth_forces(0.0, d0.q_static, Vec7::Zero(), f);
+  const Vec7 rest = Vec7::Zero();
+  m.smooth_forces(0.0, d0.q_static, rest, f);
   CHECK(f.head<4>().isZero(0.0));  // centred, no weight: exactly at rest
 
   const RotorStatorParams ref;

@@ -11,6 +11,12 @@
 using namespace rubdyn;
 
 namespace {
+// the rigid rotor's size, as fixed-size types (the model's arguments bind to them, no copies)
+using Vec7 = Eigen::Matrix<double, 7, 1>;
+using Mat7 = Eigen::Matrix<double, 7, 7>;
+}  // namespace
+
+namespace {
 
 RotorStatorParams reference_params() {
   return RotorStatorParams{};
@@ -36,7 +42,7 @@ struct RandomStates {
   Vec7 a() {
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     Vec7 x;
-    for (int i = 0; i < kNumDofs; ++i) x[i] = 1e3 * u(rng);
+    for (int i = 0; i < 7; ++i) x[i] = 1e3 * u(rng);
     x[TH] = 300.0 * u(rng);
     return x;
   }
@@ -95,7 +101,7 @@ TEST_CASE("Equations of motion equal Euler-Lagrange of the Lagrangian (11)-(12)"
   // round-off small (T ~ 1.2e5 J is dominated by the spin), and the only error is round-off.
   auto momentum = [&](const Vec7& q, const Vec7& v) {
     Vec7 pm;
-    for (int i = 0; i < kNumDofs; ++i) {
+    for (int i = 0; i < 7; ++i) {
       const double s = 1.0;
       Vec7 vp = v, vm = v;
       vp[i] += s;
@@ -109,7 +115,7 @@ TEST_CASE("Equations of motion equal Euler-Lagrange of the Lagrangian (11)-(12)"
     const double s = 1e-1;
     const Vec7 dpdt = (momentum(q + s * v, v + s * a) - momentum(q - s * v, v - s * a)) / (2 * s);
     Vec7 dLdq;
-    for (int i = 0; i < kNumDofs; ++i) {
+    for (int i = 0; i < 7; ++i) {
       const double sq = 1e-1;
       Vec7 qp = q, qm = q;
       qp[i] += sq;
@@ -142,16 +148,16 @@ TEST_CASE("W_N is the gradient of d_N - v_t is the relative velocity of the mate
   RandomStates rs;
   for (int k = 0; k < 500; ++k) {
     const Vec7 q = rs.q(p.stator.gap), v = rs.v();
-    const auto c = model.contact(q, v);
+    const auto c = model.contact(0, 0.0, q, v);
     REQUIRE(c.normal_defined);
     Vec7 grad;
-    for (int i = 0; i < kNumDofs; ++i) {
+    for (int i = 0; i < 7; ++i) {
       const double s =
           1e-9;  // gap ~ 1e-4 m: truncation ~ s^2/g0 ~ 1e-14, round-off ~ 1e-16*1e-4/1e-9
       Vec7 qp = q, qm = q;
       qp[i] += s;
       qm[i] -= s;
-      grad[i] = (model.contact(qp, v).d_N - model.contact(qm, v).d_N) / (2 * s);
+      grad[i] = (model.contact(0, 0.0, qp, v).d_N - model.contact(0, 0.0, qm, v).d_N) / (2 * s);
     }
     REQUIRE((grad - c.W_N).norm() < 1e-6);  // |W_N| = sqrt(2): 1e-6 covers the FD errors above
     REQUIRE(std::abs(c.W_N.dot(c.W_T)) < 1e-15);
@@ -195,10 +201,10 @@ TEST_CASE("Acceleration-level terms (dW/dt) v match finite differences along a m
     q[XR] = q[XS] + rho * std::cos(ang);
     q[YR] = q[YS] + rho * std::sin(ang);
     const Vec7 v = rs.v(), a = rs.a();
-    const auto c = model.contact(q, v);
+    const auto c = model.contact(0, 0.0, q, v);
     const double s = 1e-7;
-    const auto cp = model.contact(q + s * v + 0.5 * s * s * a, v + s * a);
-    const auto cm = model.contact(q - s * v + 0.5 * s * s * a, v - s * a);
+    const auto cp = model.contact(0, 0.0, q + s * v + 0.5 * s * s * a, v + s * a);
+    const auto cm = model.contact(0, 0.0, q - s * v + 0.5 * s * s * a, v - s * a);
     const double dvN = (cp.v_N - cm.v_N) / (2 * s), dvt = (cp.v_t - cm.v_t) / (2 * s);
     // |v_rel| <= 0.3 m/s at rho >= 1e-4 m: angular rate of n up to 3e3 rad/s, so the third
     // derivative of v_N is ~ 0.3 * (3e3)^3 ~ 1e10 and the truncation s^2/6 * 1e10 ~ 2e-5;
@@ -214,7 +220,7 @@ TEST_CASE("Centred rotor: no normal is defined and no contact is possible", "[mo
   q[XR] = q[XS] = 3e-5;
   q[YR] = q[YS] = -2e-5;
   v[TH] = 2000.0;
-  const auto c = model.contact(q, v);
+  const auto c = model.contact(0, 0.0, q, v);
   REQUIRE_FALSE(c.normal_defined);
   REQUIRE(c.d_N == model.params().stator.gap);
   REQUIRE(c.W_N.isZero());
@@ -230,7 +236,7 @@ TEST_CASE("Analytic Jacobians match finite differences", "[model]") {
     Mat7 J, dfdq, dfdv;
     model.mass_matrix_product_jacobian(q, a, J);
     model.smooth_force_jacobians(0.0, q, v, dfdq, dfdv);
-    for (int i = 0; i < kNumDofs; ++i) {
+    for (int i = 0; i < 7; ++i) {
       const double s = 1e-6;
       Vec7 qp = q, qm = q, vp = v, vm = v;
       qp[i] += s;
@@ -308,7 +314,7 @@ TEST_CASE("Contact-free motion conserves energy - with torque and damping the ba
     double spin_min = 1e300, spin_max = 0;
     for (int i = 0; i < steps; ++i) {
       s = rk4_step(m, s, h);
-      REQUIRE(m.contact(s.q, s.v).d_N > 0.0);
+      REQUIRE(m.contact(0, 0.0, s.q, s.v).d_N > 0.0);
       const double spin = 0.5 * p.rotor.Jp * s.v[TH] * s.v[TH];
       spin_min = std::min(spin_min, spin);
       spin_max = std::max(spin_max, spin);

@@ -30,12 +30,12 @@ TEST_CASE("OutputFolder writes the documented files", "[io]") {
   const CaseSpec spec = load_case(std::string(RUBDYN_SOURCE_DIR) + "/cases/reference.toml");
   {
     OutputFolder out(dir.string(), spec);
-    Sample s;
+    Sample s(7, 1);
     s.t = 0.25;
     s.q[4] = 1.5;
     s.v[4] = 2000.0;
-    s.d_N = 1e-4;
-    s.phase = Phase::SlipNeg;
+    s.contacts[0].d_N = 1e-4;
+    s.contacts[0].phase = Phase::SlipNeg;
     out.sample(s);
     EventRecord e;
     e.t = 0.125;
@@ -79,7 +79,7 @@ TEST_CASE("A run that never ends cleanly leaves no summary.json", "[io]") {
   const CaseSpec spec = load_case(std::string(RUBDYN_SOURCE_DIR) + "/cases/reference.toml");
   {
     OutputFolder out(dir.string(), spec);
-    out.sample(Sample{});
+    out.sample(Sample(7, 1));
   }
   CHECK(fs::exists(dir / "timeseries.csv"));
   CHECK_FALSE(fs::exists(dir / "summary.json"));

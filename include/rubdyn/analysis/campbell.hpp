@@ -1,5 +1,7 @@
 #pragma once
-// Campbell diagram of the coupled rotor-stator system (paper, section 5.1.2, Fig. 8).
+// Campbell diagram of the coupled rotor-stator system (paper, section 5.1.2, Fig. 8), of any
+// model's linearisation (LagrangianModel::linearize: M x'' + (Omega G + D) x' + K x = 0 with
+// (x, y) nodes). The rigid rotor's, written out:
 //
 // Model. The stator is tied to the rotor at R (x_s = x_r, y_s = y_r): m_s is added to M22 on x_r
 // and y_r, k_s and c_s act on x_r and y_r. The spin theta' = Omega is imposed and the mass matrix
@@ -8,7 +10,8 @@
 //     M4 q'' + (Omega G4 + D4) q' + K4 q = 0,
 //     M4 = [M11 I, M12 I; M12 I, (M22 + m_s) I],  K4 = diag(k_b, k_b, k_s, k_s),
 //     D4 = diag(c_b, c_b, c_s, c_s) (damped analysis only, else 0).
-// Eigenvalues lambda of the first-order (8x8) form; the four with Im(lambda) > 0 are the modes:
+// Eigenvalues lambda of the first-order (8x8) form; the four with Im(lambda) > 0 are the modes
+// (in general: 2 N_dofs, N_dofs modes):
 // frequency f = Im(lambda) / 2 pi [Hz], damping ratio zeta = -Re(lambda) / |lambda|.
 //
 // Whirl direction (forward / backward). Spin theta' > 0 turns the rotor counterclockwise in the
@@ -35,45 +38,50 @@
 #include <string>
 #include <vector>
 
+#include "rubdyn/model/lagrangian_model.hpp"
 #include "rubdyn/model/rotor_stator_params.hpp"
 
 namespace rubdyn {
 
-/// The four whirl-labelled modes at one spin speed.
+/// The whirl-labelled modes at one spin speed: for a linear model with N nodes, N forward and N
+/// backward modes, index 1 the lowest frequency in each direction.
 struct CampbellPoint {
-  double omega = 0.0;                                 ///< spin speed Omega [rad/s]
-  double f1b = 0.0, f1f = 0.0, f2b = 0.0, f2f = 0.0;  ///< frequencies [Hz] (NaN: mode missing)
-  double zeta_1b = 0.0, zeta_1f = 0.0, zeta_2b = 0.0, zeta_2f = 0.0;  ///< damping ratios [-]
+  double omega = 0.0;                               ///< spin speed Omega [rad/s]
+  std::vector<double> f_backward, f_forward;        ///< [Hz], N each, ascending (NaN: mode missing)
+  std::vector<double> zeta_backward, zeta_forward;  ///< damping ratios [-] (0 when undamped)
+  /// The first two of each direction (the rigid rotor's four modes; NaN when absent).
+  double f1b = 0.0, f1f = 0.0, f2b = 0.0, f2f = 0.0;
+  double zeta_1b = 0.0, zeta_1f = 0.0, zeta_2b = 0.0, zeta_2f = 0.0;
   int n_forward = 0, n_backward = 0;  ///< oscillating modes found in each direction
   double min_whirl_purity = 1.0;      ///< min over modes of |E_f - E_b| / (E_f + E_b), 1: circular
-  /// Exactly two forward and two backward modes, each with an unambiguous whirl.
+  /// Exactly N forward and N backward modes, each with an unambiguous whirl.
   bool labels_ok = false;
 };
 
-/// The coupled 4-dof system, assembled once. solve() is cheap (one 8x8 real eigenproblem) and
-/// allocates nothing (fixed-size Eigen types only), so it can be called per sample of a run.
+/// The linear model's first-order form, assembled once; solve() is one real eigenproblem of
+/// size 2 N_dofs (the rigid rotor: 8, cheap enough to be called per frame of a spectrogram).
 class CampbellSolver {
  public:
-  using Mat4 = Eigen::Matrix<double, 4, 4>;
-
-  /// damped = false: D4 = 0 (the paper's Campbell diagram); true: bearing and stator dampers.
+  /// damped = false: D = 0 (the paper's Campbell diagram); true: the model's dampers.
+  explicit CampbellSolver(const LinearModel& lm, bool damped = false);
+  /// The rigid rotor's tied system (RotorStatorModel::linearize(Linearization::Tied)).
   explicit CampbellSolver(const RotorStatorParams& p, bool damped = false);
 
-  /// The four modes at spin speed omega [rad/s] (any sign; omega < 0 swaps the directions).
+  /// The modes at spin speed omega [rad/s] (any sign; omega < 0 swaps the directions).
   CampbellPoint solve(double omega) const;
 
   bool damped() const { return damped_; }
-  const Mat4& M4() const { return M_; }  ///< [kg]
-  const Mat4& G4() const { return G_; }  ///< [kg], skew-symmetric; the force is Omega G4 q'
-  const Mat4& D4() const { return D_; }  ///< [N s/m], zero when undamped
-  const Mat4& K4() const { return K_; }  ///< [N/m]
+  int nodes() const { return static_cast<int>(lm_.nodes.size()); }
+  const LinearModel& model() const { return lm_; }
+  /// The column labels of the modes: f1b, f1f, f2b, f2f, ... (N of each direction).
+  std::vector<std::string> labels() const;
 
  private:
+  LinearModel lm_;
   bool damped_;
-  double w_ref_;                    // time scale of the first-order form [rad/s]
-  Mat4 M_, G_, D_, K_;              // the coupled matrices
-  Mat4 MiK_, MiG_, MiD_;            // M4^-1 K4 / w_ref^2, M4^-1 G4 / w_ref, M4^-1 D4 / w_ref
-  Eigen::Matrix<double, 2, 2> M2_;  // per-direction mass matrix (whirl energies)
+  double w_ref_;         // time scale of the first-order form [rad/s]
+  Mat MiK_, MiG_, MiD_;  // M^-1 K / w_ref^2, M^-1 G / w_ref, M^-1 D / w_ref
+  Mat Mx_;               // the mass matrix among the nodes' x coordinates (whirl energies)
 };
 
 /// One-shot convenience: CampbellSolver(p, damped).solve(omega).
@@ -82,22 +90,27 @@ CampbellPoint solve_campbell_point(const RotorStatorParams& p, double omega, boo
 /// The diagram on a uniform grid.
 struct CampbellDiagram {
   bool damped = false;
-  std::vector<double> omega;                               ///< grid [rad/s], from 0 to omega_max
-  std::vector<double> f1b, f1f, f2b, f2f;                  ///< [Hz], one value per grid point
-  std::vector<double> zeta_1b, zeta_1f, zeta_2b, zeta_2f;  ///< [-], empty when undamped
+  std::vector<double> omega;              ///< grid [rad/s], from 0 to omega_max
+  std::vector<std::string> labels;        ///< f1b, f1f, f2b, f2f, ...
+  std::vector<std::vector<double>> f;     ///< [label][grid point] [Hz]
+  std::vector<std::vector<double>> zeta;  ///< [label][grid point] [-], empty when undamped
   std::vector<double> unlabelled;  ///< grid speeds where labels_ok was false (should be none)
 
   std::size_t size() const { return omega.size(); }
   bool labels_ok() const { return unlabelled.empty(); }
+  /// The frequencies of a label (f1b, ...); throws std::out_of_range for an unknown one.
+  const std::vector<double>& column(const std::string& label) const;
 };
 
 /// `points` (>= 2) speeds Omega_i = omega_max i / (points - 1), omega_max > 0.
 /// Throws std::invalid_argument on points < 2 or omega_max not finite and > 0.
+CampbellDiagram compute_campbell_diagram(const LinearModel& lm, double omega_max, int points = 201,
+                                         bool damped = false);
 CampbellDiagram compute_campbell_diagram(const RotorStatorParams& p, double omega_max,
                                          int points = 201, bool damped = false);
 
-/// campbell.csv text: header omega_rad_s,omega_rpm,f1b,f1f,f2b,f2f (Hz) and, when damped,
-/// zeta_1b,zeta_1f,zeta_2b,zeta_2f; one row per grid point, 17 significant digits.
+/// campbell.csv text: header omega_rad_s,omega_rpm,f1b,f1f,f2b,f2f,... (Hz) and, when damped,
+/// zeta_1b,zeta_1f,...; one row per grid point, 17 significant digits.
 std::string campbell_csv(const CampbellDiagram& d);
 
 }  // namespace rubdyn

@@ -49,7 +49,7 @@ struct DerivedQuantities {
   bool rests_on_stator = false;      ///< true iff gravity > 0 (then at the bottom of the clearance)
   double F_N = 0;                    ///< static contact force nu m g [N] (0 without gravity)
   double y_b = 0, y_r = 0, y_s = 0;  ///< static positions [m]
-  Vec7 q_static = Vec7::Zero();      ///< the same as a generalised position (x_* = theta = 0)
+  Vec q_static = Vec::Zero(7);       ///< the same as a generalised position (x_* = theta = 0)
   // natural frequencies at rest [Hz]
   double f1 = 0, f2 = 0;       ///< coupled system (stator tied at R), each a double mode
   double f_stator = 0;         ///< stator alone sqrt(k_s / m_s) / 2 pi

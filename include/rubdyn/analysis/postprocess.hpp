@@ -115,8 +115,11 @@ struct Spectrogram {
   std::vector<double> omega;                   ///< mean spin speed of each frame [rad/s]
   std::vector<double> f;                       ///< [Hz], ascending
   std::vector<std::vector<double>> amplitude;  ///< amplitude[frame][k] [m]
-  /// Campbell frequencies at each frame's omega [Hz]: forward >= 0, backward <= 0.
-  std::vector<double> f1f, f2f, f1b, f2b;
+  /// Campbell frequencies of the model's tied linearisation at each frame's omega [Hz]:
+  /// campbell[label][frame], labels f1f, f2f, ..., f1b, f2b, ... (forward >= 0, backward <= 0);
+  /// none when the model has no such linearisation.
+  std::vector<std::string> campbell_labels;
+  std::vector<std::vector<double>> campbell;
 };
 
 std::vector<DerivedSample> derive(const RunRecord& r);

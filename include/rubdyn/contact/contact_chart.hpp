@@ -20,6 +20,9 @@
 // (Q(p), J p'); `reduce` returns p'' = L (a - c) for a left inverse L of J (L J = I). Since a
 // satisfies the constraints at acceleration level, a - c lies in the range of J and p'' is the
 // solution of J^T M J p'' = J^T (f - M c): the reduced equations of motion.
+#include <array>
+#include <vector>
+
 #include "rubdyn/core/types.hpp"
 
 namespace rubdyn {
@@ -33,25 +36,28 @@ enum class ChartMode : int { Slip = 0, Stick = 1 };
 /// (rtol g0 + atol) / L; its rate is weighted rtol |p_i'| + atol_v (atol_v taken in rad/s:
 /// stricter than the atol_v / L the displacement rate would give).
 struct ChartScales {
-  Vec7 length = Vec7::Zero();
+  std::vector<double> length;  ///< one per reduced coordinate (size dim(mode)); empty: all 0
 };
+
+/// What a chart keeps of the state where a phase began (e.g. phi0, theta0 of a stick phase).
+using ChartAnchor = std::array<double, 4>;
 
 class ContactChart {
  public:
   virtual ~ContactChart() = default;
-  /// Number of reduced coordinates in `mode` (<= 7).
+  /// Number of reduced coordinates in `mode` (< num_dofs() of the model).
   virtual int dim(ChartMode mode) const = 0;
   /// Reduced coordinates of a state on the manifold (d_N = 0, v_N = 0; and v_t = 0 for Stick):
-  /// p, p' (first dim entries) and the anchor the chart keeps for this phase.
-  virtual void chart(ChartMode mode, const Vec7& q, const Vec7& v, Vec7& anchor, Vec7& p,
-                     Vec7& pd) const = 0;
-  /// The state on the manifold: q = Q(p), v = J(p) p'.
-  virtual void embed(ChartMode mode, const Vec7& anchor, const Vec7& p, const Vec7& pd, Vec7& q,
-                     Vec7& v) const = 0;
+  /// p, p' (size dim(mode)) and the anchor the chart keeps for this phase.
+  virtual void chart(ChartMode mode, VecIn q, VecIn v, ChartAnchor& anchor, VecOut p,
+                     VecOut pd) const = 0;
+  /// The state on the manifold: q = Q(p), v = J(p) p' (q, v of the model's size).
+  virtual void embed(ChartMode mode, const ChartAnchor& anchor, VecIn p, VecIn pd, VecOut q,
+                     VecOut v) const = 0;
   /// p'' of a full acceleration a that satisfies the constraints at acceleration level, at the
   /// embedded state q = Q(p).
-  virtual void reduce(ChartMode mode, const Vec7& anchor, const Vec7& p, const Vec7& pd,
-                      const Vec7& q, const Vec7& a, Vec7& pdd) const = 0;
+  virtual void reduce(ChartMode mode, const ChartAnchor& anchor, VecIn p, VecIn pd, VecIn q,
+                      VecIn a, VecOut pdd) const = 0;
   /// How the error of each reduced coordinate is weighted.
   virtual ChartScales scales(ChartMode mode) const = 0;
 };

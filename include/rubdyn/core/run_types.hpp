@@ -70,20 +70,30 @@ inline int exit_code(Termination t) {
   }
 }
 
-/// One output sample (dense output on the output grid, or before/after an event).
-struct Sample {
-  double t = 0.0;
-  Vec7 q = Vec7::Zero();
-  Vec7 v = Vec7::Zero();
+/// The state of one contact at an output sample.
+struct ContactSample {
   double d_N = 0.0, v_N = 0.0, v_t = 0.0;
   double F_N = 0.0, F_T = 0.0;  ///< contact forces (impulse / h for impulse-based schemes)
   Phase phase = Phase::Free;
+};
+
+/// One output sample (dense output on the output grid, or before/after an event): the state
+/// (q, v of the model's size) and each contact's quantities (one entry per contact).
+struct Sample {
+  Sample() = default;
+  /// Sized for a model with n dofs and `contacts` contacts.
+  Sample(int n, int contacts)
+      : q(Vec::Zero(n)), v(Vec::Zero(n)), contacts(static_cast<std::size_t>(contacts)) {}
+  double t = 0.0;
+  Vec q, v;
+  std::vector<ContactSample> contacts;
 };
 
 /// One logged event.
 struct EventRecord {
   double t = 0.0;
   EventKind kind = EventKind::Impact;
+  int contact = 0;  ///< the contact the event belongs to (0-based)
   Phase phase_before = Phase::Free, phase_after = Phase::Free;
   double d_N = 0.0;
   double v_N_minus = 0.0, v_N_plus = 0.0;

@@ -1,40 +1,58 @@
 #pragma once
-// Fixed-size linear algebra for the 7-dof rotor-stator model, and the dof layout.
+// Linear algebra of every model and solver: dynamic sizes, set by the model (num_dofs()).
 //
-// q = (x_b, y_b, x_r, y_r, theta, x_s, y_s)   [m, m, m, m, rad, m, m]
-// v = dq/dt                                   [m/s, ..., rad/s, ...]
-// Hot paths use only these fixed-size types: nothing allocates.
-// Models with fewer dofs (test problems) pad the unused dofs with unit mass and no force; those
-// dofs then stay at rest and never enter a contact.
+// A model owns its size: the rigid rotor has 7 dofs, the Jeffcott rotor 5 (3 with a rigid
+// stator), a user's test problem as many as it needs. Solvers size their workspaces when they
+// are built and reuse them, so that no step allocates: a hot path assigns into vectors of the
+// right size (Eigen then reuses their storage) and never creates one. Arguments are passed as
+// Eigen::Ref views, which bind to a Vec, a column of a Mat or a fixed-size vector without a copy
+// (an expression such as `q + v` would be evaluated into a temporary: hot paths never pass one).
 #include <Eigen/Core>
 
 namespace rubdyn {
 
-inline constexpr int kNumDofs = 7;
+using Vec = Eigen::VectorXd;
+using Mat = Eigen::MatrixXd;
+using Vec2 = Eigen::Vector2d;
+using Mat2 = Eigen::Matrix2d;
 
-using Vec2 = Eigen::Matrix<double, 2, 1>;
-using Vec7 = Eigen::Matrix<double, kNumDofs, 1>;
-using Mat2 = Eigen::Matrix<double, 2, 2>;
-using Mat7 = Eigen::Matrix<double, kNumDofs, kNumDofs>;
-using Mat7x3 = Eigen::Matrix<double, kNumDofs, 3>;
-using Vec14 = Eigen::Matrix<double, 2 * kNumDofs, 1>;
-using Mat14 = Eigen::Matrix<double, 2 * kNumDofs, 2 * kNumDofs>;
-
-/// Index of each generalised coordinate in q (paper, section 3.2.2 and eq. 17).
-enum Dof : int { XB = 0, YB = 1, XR = 2, YR = 3, TH = 4, XS = 5, YS = 6 };
-
-/// Names of the dofs in q order, as used in output files and case files.
-inline constexpr const char* kDofNames[kNumDofs] = {"x_b",   "y_b", "x_r", "y_r",
-                                                    "theta", "x_s", "y_s"};
-/// Names of the velocities in v order, as used in output files.
-inline constexpr const char* kVelNames[kNumDofs] = {"vx_b",  "vy_b", "vx_r", "vy_r",
-                                                    "omega", "vx_s", "vy_s"};
+/// A read-only view of a contiguous vector: a Vec, a fixed-size vector, a Map, a column of a Mat
+/// or a Ref, without a copy and without the heap object that Eigen::Ref<const Vec> carries for
+/// the copies it may make (measured: its construction and destruction cost 10 % of a fixed-step
+/// run). An expression does not convert: it has no storage to view, and a hot path evaluates
+/// it into a workspace first.
+class VecView : public Eigen::Map<const Vec> {
+ public:
+  using Base = Eigen::Map<const Vec>;
+  template <class D>
+  VecView(const Eigen::PlainObjectBase<D>& x)  // NOLINT: implicit by design
+      : Base(x.data(), x.size()) {
+    static_assert(D::IsVectorAtCompileTime, "a vector is expected");
+  }
+  template <class D, int Level>
+  VecView(const Eigen::MapBase<D, Level>& x)  // NOLINT: implicit by design
+      : Base(x.data(), x.size()) {
+    static_assert(D::IsVectorAtCompileTime, "a vector is expected");
+    static_assert(D::InnerStrideAtCompileTime == 1, "a contiguous vector is expected");
+  }
+};
+/// Read-only vector argument.
+using VecIn = const VecView&;
+/// Vector result written by the callee into storage of the right size.
+using VecOut = Eigen::Ref<Vec>;
+/// Read-only matrix argument.
+using MatIn = const Eigen::Ref<const Mat>&;
+/// Matrix result written by the callee into storage of the right size (a Mat, or a block of
+/// columns of one).
+using MatOut = Eigen::Ref<Mat>;
 
 /// A mechanical state: positions and velocities at one time.
 struct MechanicalState {
   double t = 0.0;
-  Vec7 q = Vec7::Zero();
-  Vec7 v = Vec7::Zero();
+  Vec q, v;
+  MechanicalState() = default;
+  /// n dofs, at rest at the origin.
+  explicit MechanicalState(int n, double t0 = 0.0) : t(t0), q(Vec::Zero(n)), v(Vec::Zero(n)) {}
 };
 
 }  // namespace rubdyn

@@ -25,28 +25,38 @@ namespace rubdyn {
 
 /// M^{-1} applied to f, W_N and W_T, and the quantities every phase needs; computed once per
 /// evaluation (one solve with M(q) for three right-hand sides: the model's structured solve when
-/// it has one; no allocation).
+/// it has one). Sized for the model when built (ContactOperators(n)); computing into it then
+/// allocates nothing.
 struct ContactOperators {
+  ContactOperators() = default;
+  explicit ContactOperators(int n) : c(n), B(Mat::Zero(n, 3)) {}
   ContactKinematics c;
-  Vec7 Minv_f, Minv_WN, Minv_WT;
+  /// M^{-1} f, M^{-1} W_N, M^{-1} W_T: the columns of B, solved in place (no copies).
+  auto Minv_f() const { return B.col(0); }
+  auto Minv_WN() const { return B.col(1); }
+  auto Minv_WT() const { return B.col(2); }
+  int size() const { return static_cast<int>(B.rows()); }
   double A_NN = 0, A_NT = 0, A_TT = 0;  ///< Delassus matrix entries
   double b_N = 0, b_T = 0;              ///< free normal/tangential accelerations d_N'', v_t'
+  Mat B;                                ///< (f, W_N, W_T), then M^{-1} applied to them in place
 };
-void compute_contact_operators(const LagrangianModel& m, double t, const Vec7& q, const Vec7& v,
+void compute_contact_operators(const LagrangianModel& m, double t, VecIn q, VecIn v,
                                ContactOperators& op);
 /// Updates the velocity-dependent parts (kinematic rates, M^{-1} f, b) for a new v at the same
 /// q: one solve with M(q) instead of three.
-void update_contact_velocity(const LagrangianModel& m, double t, const Vec7& q, const Vec7& v,
+void update_contact_velocity(const LagrangianModel& m, double t, VecIn q, VecIn v,
                              ContactOperators& op);
 
 struct PhaseDynamics {
-  Vec7 a = Vec7::Zero();
+  PhaseDynamics() = default;
+  explicit PhaseDynamics(int n) : a(Vec::Zero(n)) {}
+  Vec a;
   double F_N = 0.0, F_T = 0.0;
   double normal_mass = 0.0;  ///< slip: A_NN - mu s A_NT; stick: det(A) / A_TT; free: A_NN
   bool well_posed = true;    ///< false for a Painleve slip (normal_mass <= 0) or singular stick
 };
-/// Acceleration and contact forces in `phase`.
-PhaseDynamics phase_dynamics(const ContactOperators& op, Phase phase, double mu);
+/// Acceleration and contact forces in `phase`, into d (d.a of the model's size).
+void phase_dynamics(const ContactOperators& op, Phase phase, double mu, PhaseDynamics& d);
 
 /// Result of the mode selection at an event on the constraint (d_N = 0, v_N = 0).
 struct ModeDecision {
@@ -68,22 +78,25 @@ ModeDecision select_mode(const ContactOperators& op, double mu, double v_t_eps,
                          double force_scale = 0.0);
 
 struct ImpactResult {
-  Vec7 v_plus = Vec7::Zero();
+  Vec v_plus;
   double P_N = 0.0, P_T = 0.0;
   bool sticking = false;   ///< the impulse stayed inside the cone
   bool ok = true;          ///< false: no solution (a Painleve-type Delassus matrix)
   bool nonunique = false;  ///< several solutions (same cause); the tie rule picked one
 };
 /// Impact map at (q, v-) with the contact law of the model. Requires op computed at (q, v-).
-ImpactResult impact_map(const ContactOperators& op, const Vec7& v_minus, const ContactLaw& law);
+ImpactResult impact_map(const ContactOperators& op, VecIn v_minus, const ContactLaw& law);
 
 /// Puts q on d_N = 0 by steps along W_N (Euclidean metric): q <- q - W_N d_N / |W_N|^2, while
 /// |d_N| > tol (at most 3 steps). For the circular clearance this moves the rotor and stator
 /// centres apart along the normal and is exact in one step; for any model it is a Newton step.
-void project_position(const LagrangianModel& m, Vec7& q, const Vec7& v, double tol);
+/// `scratch` (sized for the model) holds the kinematics.
+void project_position(const LagrangianModel& m, double t, VecOut q, VecIn v, double tol,
+                      ContactKinematics& scratch);
 
 /// Mass-weighted projection of v onto {v_N = 0} (n_constraints = 1) or {v_N = 0, v_t = 0}
-/// (n_constraints = 2): v <- v - M^{-1} W (W^T M^{-1} W)^{-1} W^T v (W^T v = 0 exactly after).
-void project_velocity(const ContactOperators& op, int n_constraints, Vec7& v);
+/// (n_constraints = 2): v <- v - M^{-1} W (W^T M^{-1} W)^{-1} (W^T v + b) (v_N = v_t = 0 exactly
+/// after, a prescribed motion's share b included).
+void project_velocity(const ContactOperators& op, int n_constraints, VecOut v);
 
 }  // namespace rubdyn

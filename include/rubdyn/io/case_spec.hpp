@@ -6,14 +6,16 @@
 #include <vector>
 
 #include "rubdyn/core/types.hpp"
+#include "rubdyn/model/rotor_stator_model.hpp"
 #include "rubdyn/model/rotor_stator_params.hpp"
 
 namespace rubdyn {
 
-/// [initial]: every position and velocity (default 0), spin speed omega0.
+/// [initial]: every position and velocity of the model's coordinates (default 0), in the
+/// model's order; the keys are the coordinates' names and rate keys (x_b, ..., omega0, ...).
 struct InitialState {
-  Vec7 q0 = Vec7::Zero();  ///< keys x_b, y_b, x_r, y_r, theta, x_s, y_s
-  Vec7 v0 = Vec7::Zero();  ///< keys vx_b, vy_b, vx_r, vy_r, omega0, vx_s, vy_s
+  Vec q0 = Vec::Zero(RotorStatorModel::kDofs);
+  Vec v0 = Vec::Zero(RotorStatorModel::kDofs);
 };
 
 /// [run]

@@ -1,9 +1,9 @@
 #pragma once
 // OutputFolder: the sink that writes a run's output folder
-//   timeseries.csv   t, x_b, y_b, x_r, y_r, theta, x_s, y_s, vx_b, vy_b, vx_r, vy_r, omega,
-//                    vx_s, vy_s, d_N, v_N, v_t, F_N, F_T, phase        (17 significant digits)
+//   timeseries.csv   the model's columns (io/columns.hpp): t, positions, velocities, the contact
+//                    quantities d_N, v_N, v_t, F_N, F_T and phase (round-trip digits)
 //   events.csv       t, kind, phase_before, phase_after, d_N, v_N_minus, v_N_plus, v_t_minus,
-//                    v_t_plus, P_N, P_T, F_N, F_T, witness, note
+//                    v_t_plus, P_N, P_T, F_N, F_T, t_accumulation, witness, note
 //   summary.json     every field of RunSummary, plus "complete": true|false
 //   case.resolved.toml  the case with every default and override filled in
 // Rows are streamed (and flushed at events), so a run that ends early keeps what it wrote; its
@@ -22,9 +22,11 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "rubdyn/core/run_types.hpp"
 #include "rubdyn/io/case_spec.hpp"
+#include "rubdyn/io/columns.hpp"
 #include "rubdyn/io/text_files.hpp"  // OutputError
 
 namespace rubdyn {
@@ -59,6 +61,10 @@ class OutputFolder final : public OutputSink {
  private:
   void failed(const std::string& file);
   std::string dir_;
+  std::vector<SampleColumn> columns_;       // timeseries.csv (io/columns.hpp)
+  std::vector<EventColumn> event_columns_;  // events.csv
+  int n_dofs_ = 0, n_contacts_ = 0;
+  std::string buf_;  // one row
   std::FILE* ts_ = nullptr;
   std::FILE* ev_ = nullptr;
   int lock_fd_ = -1;

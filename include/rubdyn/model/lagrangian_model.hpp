@@ -1,21 +1,37 @@
 #pragma once
-// LagrangianModel: what every solver may know about the mechanics. Solvers see the model only
-// through this interface (they never include the rotor-stator header), so that test problems
-// with exact solutions (bouncing ball, block on a belt, spring-mass) run through the same solvers.
+// LagrangianModel: what every solver and every layer above the model may know about the
+// mechanics. Solvers see a model only through this interface (they never include a model's
+// header), so that the rigid rotor, the Jeffcott rotor and test problems with exact solutions
+// (bouncing ball, block on a belt, spring-mass) run through the same solvers.
 //
-// Equations of motion with one unilateral contact (paper eq. 21):
-//     M(q) dv/dt = f(t, q, v) + W_N(q) F_N + W_T(q) F_T,     dq/dt = v
+// The model owns its size (num_dofs()), the names and roles of its coordinates (coordinates()),
+// its contacts (contact_count(), each with its kinematics, law and gap scale) and the services
+// the layers above need: the initial-state gap check (initial_penetration), the linearisation of
+// the Campbell diagram (linearize).
+//
+// Equations of motion with K unilateral contacts (paper eq. 21, with C_N, C_T of K columns):
+//     M(q) dv/dt = f(t, q, v) + sum_k (W_N,k(q) F_N,k + W_T,k(q) F_T,k),     dq/dt = v
 // f collects every smooth force: external loads, gyroscopic, damping, stiffness, gravity.
-// Energy audit: d(T + V)/dt = P_ext + P_damp + F_N v_N + F_T v_t, where T = 1/2 v^T M(q) v, V is
-// the potential of the conservative forces inside f, P_ext the power of the non-conservative
-// applied loads (driving torque) and P_damp <= 0 the power of the viscous dampers.
-#include <Eigen/Cholesky>
+// Energy audit: d(T + V)/dt = P_ext + P_damp + sum_k (F_N,k v_N,k + F_T,k v_t,k), where
+// T = 1/2 v^T M(q) v, V is the potential of the conservative forces inside f, P_ext the power of
+// the non-conservative applied loads (driving torque) and P_damp <= 0 the power of the viscous
+// dampers.
+//
+// Sizes: every vector argument has num_dofs() entries, every matrix num_dofs() rows (VecIn binds
+// to a Vec without a copy). A model holds no mutable state: one model may serve several runs on
+// several threads.
+#include <memory>
+#include <optional>
+#include <string>
 #include <string_view>
+#include <utility>
+#include <vector>
 
 #include "rubdyn/contact/contact_chart.hpp"
 #include "rubdyn/contact/contact_kinematics.hpp"
 #include "rubdyn/contact/contact_law.hpp"
 #include "rubdyn/core/types.hpp"
+#include "rubdyn/model/coordinates.hpp"
 
 namespace rubdyn {
 
@@ -25,60 +41,112 @@ struct SmoothPower {
   double damping = 0.0;   ///< viscous dampers, <= 0
 };
 
+/// Which linearisation of the model a Campbell diagram is made of (LagrangianModel::linearize).
+enum class Linearization {
+  /// The stator tied to the rotor in every contact plane (the paper's coupled system, section
+  /// 5.1.2): the modes a permanent full contact would whirl at.
+  Tied,
+  /// No contact: the rotor and the stator each on their own supports.
+  Free,
+};
+
+/// A linear(ised) rotor at spin speed Omega:  M x'' + (Omega G + D) x' + K x = 0, about the
+/// centred position, with the spin imposed (its row dropped). `nodes` pairs the (x, y)
+/// coordinates whose whirl labels the modes forward or backward; the model is isotropic, so that
+/// every mode whirls one way only (analysis/campbell.hpp).
+struct LinearModel {
+  std::vector<std::string> names;  ///< the coordinates of x
+  Mat M, G, D, K;                  ///< M SPD, G skew-symmetric
+  std::vector<std::pair<int, int>> nodes;
+  int size() const { return static_cast<int>(names.size()); }
+};
+
+/// A contact that the initial state penetrates (initial_penetration).
+struct Penetration {
+  int contact = 0;
+  double d_N = 0.0;  ///< < 0 [m]
+};
+
 class LagrangianModel {
  public:
   virtual ~LagrangianModel() = default;
 
   virtual std::string_view name() const = 0;
+  /// Number of generalised coordinates n.
+  virtual int num_dofs() const = 0;
+  /// Their names and roles, in q order (size n).
+  virtual const std::vector<Coordinate>& coordinates() const = 0;
 
   /// M(q), symmetric positive definite.
-  virtual void mass_matrix(const Vec7& q, Mat7& M) const = 0;
-  /// Solves M(q) X = B in place for the first `ncols` columns of B (no allocation). The default
-  /// factors M (LDLT); a model with a structured mass matrix overrides it.
-  virtual void solve_mass(const Vec7& q, Mat7x3& B, int ncols) const {
-    Mat7 M;
-    mass_matrix(q, M);
-    const Eigen::LDLT<Mat7> ldlt(M);
-    for (int j = 0; j < ncols; ++j) B.col(j) = ldlt.solve(B.col(j));
-  }
+  virtual void mass_matrix(VecIn q, MatOut M) const = 0;
+  /// y = M(q) x. The default forms M (allocates); a model used in a fixed-step scheme's hot path
+  /// overrides it with a structured product (the built-in models do).
+  virtual void mass_product(VecIn q, VecIn x, VecOut y) const;
+  /// Solves M(q) X = B in place for every column of B (n rows). The default factors M (LDLT)
+  /// into temporaries, i.e. allocates: a model used in a solver's hot path overrides it with a
+  /// structured solve (the built-in models do).
+  virtual void solve_mass(VecIn q, MatOut B) const;
   /// J = d(M(q) a)/dq for a fixed vector a (needed by implicit schemes and analytic Jacobians).
-  virtual void mass_matrix_product_jacobian(const Vec7& q, const Vec7& a, Mat7& J) const = 0;
+  virtual void mass_matrix_product_jacobian(VecIn q, VecIn a, MatOut J) const = 0;
   /// Smooth forces f(t, q, v) (no contact).
-  virtual void smooth_forces(double t, const Vec7& q, const Vec7& v, Vec7& f) const = 0;
+  virtual void smooth_forces(double t, VecIn q, VecIn v, VecOut f) const = 0;
   /// df/dq and df/dv.
-  virtual void smooth_force_jacobians(double t, const Vec7& q, const Vec7& v, Mat7& dfdq,
-                                      Mat7& dfdv) const = 0;
-  /// Contact kinematics at (q, v).
-  virtual ContactKinematics contact(const Vec7& q, const Vec7& v) const = 0;
-  /// Kinetic energy 1/2 v^T M(q) v.
-  double kinetic_energy(const Vec7& q, const Vec7& v) const {
-    Mat7 M;
-    mass_matrix(q, M);
-    return 0.5 * v.dot(M * v);
+  virtual void smooth_force_jacobians(double t, VecIn q, VecIn v, MatOut dfdq,
+                                      MatOut dfdv) const = 0;
+
+  /// Number of unilateral contacts K. The solvers handle one (the circular clearance); a model
+  /// with more is rejected by them, not silently reduced.
+  virtual int contact_count() const { return 1; }
+  /// Kinematics of contact k at (t, q, v) into `c` (W_N and W_T of size n, every field set).
+  virtual void compute_contact(int k, double t, VecIn q, VecIn v, ContactKinematics& c) const = 0;
+  /// The same, returned, for any vector expressions (allocates: for tests and tools, not for
+  /// hot paths).
+  template <class Q, class V>
+  ContactKinematics contact(int k, double t, const Eigen::MatrixBase<Q>& q,
+                            const Eigen::MatrixBase<V>& v) const {
+    const Vec qe = q, ve = v;
+    ContactKinematics c(num_dofs());
+    compute_contact(k, t, qe, ve, c);
+    return c;
   }
-  /// Potential energy of the conservative forces included in f [J].
-  virtual double potential_energy(const Vec7& q) const = 0;
-  /// Power of the smooth non-conservative forces.
-  virtual SmoothPower smooth_power(double t, const Vec7& q, const Vec7& v) const = 0;
-  /// Scale of the gap [m] (for scaled witnesses d_N / g0 and tolerances).
-  virtual double gap_scale() const = 0;
-  /// The contact law.
-  virtual const ContactLaw& contact_law() const = 0;
+  /// The law of contact k.
+  virtual const ContactLaw& contact_law(int k = 0) const = 0;
+  /// Scale of the gap of contact k [m] (scaled witnesses d_N / g0, tolerances).
+  virtual double gap_scale(int k = 0) const = 0;
+  /// The lever arm of contact k's friction force about the spin axis: the rotor's seal radius
+  /// R (the spin entry of W_T is -R) [m]; 0 for a model without a spin.
+  virtual double contact_radius(int /*k*/ = 0) const { return 0.0; }
   /// Minimal coordinates of the contact phases, or nullptr when the model has none (the
   /// event-driven integrator then integrates contact phases as a DAE with projection).
   virtual const ContactChart* contact_chart() const { return nullptr; }
+
+  /// Kinetic energy 1/2 v^T M(q) v. The default forms M (allocates); models override it.
+  virtual double kinetic_energy(VecIn q, VecIn v) const;
+  /// Potential energy of the conservative forces included in f [J].
+  virtual double potential_energy(VecIn q) const = 0;
+  /// Power of the smooth non-conservative forces.
+  virtual SmoothPower smooth_power(double t, VecIn q, VecIn v) const = 0;
+
   /// The coordinate whose rate is the monitored spin speed omega (the run monitor, omega_max,
   /// the crossing of omega_lim; Carpenter's free-spin column), or -1 when the model has none.
   /// The solvers never name a coordinate themselves.
   virtual int spin_coordinate() const { return -1; }
   /// omega at a state (0 without a spin coordinate).
-  double spin(const Vec7& v) const {
+  virtual double spin(double /*t*/, VecIn /*q*/, VecIn v) const {
     const int i = spin_coordinate();
     return i >= 0 ? v[i] : 0.0;
   }
-  /// Number of unilateral contacts. The solvers handle one (the circular clearance); a model
-  /// with more is rejected by them, not silently reduced.
-  virtual int contact_count() const { return 1; }
+
+  // ---- services for the layers above (case validation, Campbell diagram) ----
+
+  /// The first contact that q penetrates by more than `roundoff` times its gap scale, if any
+  /// (an initial state must not penetrate; a state written by a run on the constraint has d_N
+  /// within round-off of 0, of either sign).
+  std::optional<Penetration> initial_penetration(VecIn q, double roundoff) const;
+  /// The linearised model of a Campbell diagram, or nullopt when the model has none.
+  virtual std::optional<LinearModel> linearize(Linearization /*mode*/) const {
+    return std::nullopt;
+  }
 };
 
 }  // namespace rubdyn

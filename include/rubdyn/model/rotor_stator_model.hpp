@@ -48,36 +48,48 @@
 //          its round-off (1e-13 rad) into the orbit.
 //   Error weights: phi moves the contact point by g0 per radian, theta - theta0 (stick) by R_r.
 #include <string_view>
+#include <vector>
 
 #include "rubdyn/model/lagrangian_model.hpp"
 #include "rubdyn/model/rotor_stator_params.hpp"
 
 namespace rubdyn {
 
+/// Index of each generalised coordinate of the rigid rotor in q (paper, section 3.2.2, eq. 17).
+enum Dof : int { XB = 0, YB = 1, XR = 2, YR = 3, TH = 4, XS = 5, YS = 6 };
+
 class RotorStatorModel final : public LagrangianModel {
  public:
+  static constexpr int kDofs = 7;
   explicit RotorStatorModel(const RotorStatorParams& p);
 
-  std::string_view name() const override { return "rotor-stator"; }
-  void mass_matrix(const Vec7& q, Mat7& M) const override;
-  void mass_matrix_product_jacobian(const Vec7& q, const Vec7& a, Mat7& J) const override;
-  void smooth_forces(double t, const Vec7& q, const Vec7& v, Vec7& f) const override;
-  void smooth_force_jacobians(double t, const Vec7& q, const Vec7& v, Mat7& dfdq,
-                              Mat7& dfdv) const override;
-  ContactKinematics contact(const Vec7& q, const Vec7& v) const override;
-  double potential_energy(const Vec7& q) const override;
-  SmoothPower smooth_power(double t, const Vec7& q, const Vec7& v) const override;
-  double gap_scale() const override { return p_.stator.gap; }
-  const ContactLaw& contact_law() const override { return p_.contact; }
-  void solve_mass(const Vec7& q, Mat7x3& B, int ncols) const override;
+  std::string_view name() const override { return "rigid-rotor"; }
+  int num_dofs() const override { return kDofs; }
+  const std::vector<Coordinate>& coordinates() const override;
+  void mass_matrix(VecIn q, MatOut M) const override;
+  void mass_product(VecIn q, VecIn x, VecOut y) const override;
+  void solve_mass(VecIn q, MatOut B) const override;
+  void mass_matrix_product_jacobian(VecIn q, VecIn a, MatOut J) const override;
+  void smooth_forces(double t, VecIn q, VecIn v, VecOut f) const override;
+  void smooth_force_jacobians(double t, VecIn q, VecIn v, MatOut dfdq, MatOut dfdv) const override;
+  void compute_contact(int k, double t, VecIn q, VecIn v, ContactKinematics& c) const override;
+  double kinetic_energy(VecIn q, VecIn v) const override;
+  double potential_energy(VecIn q) const override;
+  SmoothPower smooth_power(double t, VecIn q, VecIn v) const override;
+  double gap_scale(int /*k*/ = 0) const override { return p_.stator.gap; }
+  const ContactLaw& contact_law(int /*k*/ = 0) const override { return p_.contact; }
+  double contact_radius(int /*k*/ = 0) const override { return p_.rotor.radius; }
   const ContactChart* contact_chart() const override { return &chart_; }
   int spin_coordinate() const override { return TH; }
+  /// Tied: the 4-dof (x_b, y_b, x_r, y_r) system with the stator tied at R (campbell.hpp);
+  /// Free: (x_b, y_b, x_r, y_r, x_s, y_s) without contact.
+  std::optional<LinearModel> linearize(Linearization mode) const override;
 
   /// Power of the bearing dampers -c_b |v_b|^2 and of the stator dampers -c_s |v_s|^2 [W].
-  double bearing_damping_power(const Vec7& v) const;
-  double stator_damping_power(const Vec7& v) const;
+  double bearing_damping_power(VecIn v) const;
+  double stator_damping_power(VecIn v) const;
   /// Power of the driving torque tau_a theta' [W].
-  double torque_power(const Vec7& v) const { return p_.loads.torque * v[TH]; }
+  double torque_power(VecIn v) const { return p_.loads.torque * v[TH]; }
 
   const RotorStatorParams& params() const { return p_; }
   double l() const { return l_; }      ///< L - delta [m]
@@ -87,24 +99,24 @@ class RotorStatorModel final : public LagrangianModel {
   double M22() const { return M22_; }  ///< [kg]
   double H() const { return H_; }      ///< Jp / (L - delta)^2 [kg]
   /// Gyroscopic matrix G (eq. 14), constant and skew-symmetric; the force is theta' G v.
-  const Mat7& G() const { return G_; }
+  const Mat& G() const { return G_; }
   /// Damping and stiffness matrices D, K.
-  const Mat7& D() const { return D_; }
-  const Mat7& K() const { return K_; }
+  const Mat& D() const { return D_; }
+  const Mat& K() const { return K_; }
   /// External load vector f_ext (gravity split and driving torque).
-  const Vec7& f_ext() const { return fext_; }
+  const Vec& f_ext() const { return fext_; }
 
  private:
   class Chart final : public ContactChart {
    public:
     Chart(double g0, double R_r) : g0_(g0), R_r_(R_r) {}
     int dim(ChartMode mode) const override { return mode == ChartMode::Slip ? 6 : 5; }
-    void chart(ChartMode mode, const Vec7& q, const Vec7& v, Vec7& anchor, Vec7& p,
-               Vec7& pd) const override;
-    void embed(ChartMode mode, const Vec7& anchor, const Vec7& p, const Vec7& pd, Vec7& q,
-               Vec7& v) const override;
-    void reduce(ChartMode mode, const Vec7& anchor, const Vec7& p, const Vec7& pd, const Vec7& q,
-                const Vec7& a, Vec7& pdd) const override;
+    void chart(ChartMode mode, VecIn q, VecIn v, ChartAnchor& anchor, VecOut p,
+               VecOut pd) const override;
+    void embed(ChartMode mode, const ChartAnchor& anchor, VecIn p, VecIn pd, VecOut q,
+               VecOut v) const override;
+    void reduce(ChartMode mode, const ChartAnchor& anchor, VecIn p, VecIn pd, VecIn q, VecIn a,
+                VecOut pdd) const override;
     ChartScales scales(ChartMode mode) const override;
 
    private:
@@ -114,8 +126,10 @@ class RotorStatorModel final : public LagrangianModel {
   RotorStatorParams p_;
   Chart chart_;
   double l_, nu_, M11_, M12_, M22_, H_;
-  Mat7 G_, D_, K_, M0_;  // M0_: the constant part of M(q)
-  Vec7 fext_;
+  Mat G_, D_, K_, M0_;  // M0_: the constant part of M(q)
+  // the same, fixed-size: the unrolled fast path of mass_matrix and smooth_force_jacobians
+  Eigen::Matrix<double, kDofs, kDofs> M0f_, Gf_, Df_, Kf_;
+  Vec fext_;
   double detA_ = 1, Minv_s_ = 1;  // det of the 2x2 rotor block, 1 / m_s
 };
 

@@ -25,8 +25,18 @@ std::string_view to_string(StepOutcome o);
 /// The state a step completed, with its contact quantities. Moreau-Jean's step i completes the
 /// state at t_{i+1}; Carpenter's velocity at t_i is central, so its step i completes t_i.
 struct StepReport {
-  long index = 0;  ///< the state is at t_0 + index h
-  Vec7 q = Vec7::Zero(), v = Vec7::Zero();
+  StepReport() = default;
+  explicit StepReport(int n) : q(Vec::Zero(n)), v(Vec::Zero(n)) {}
+  /// Every field but q and v back to its default (the vectors keep their storage).
+  void reset() {
+    index = 0;
+    F_N = F_T = P_N = P_T = v_N_before = contact_work = 0.0;
+    phase = Phase::Free;
+    newton_iters = 0;
+    nonunique = unconverged = false;
+  }
+  long index = 0;             ///< the state is at t_0 + index h
+  Vec q, v;                   ///< the model's size
   double F_N = 0, F_T = 0;    ///< contact force (Moreau-Jean: impulse / h)
   double P_N = 0, P_T = 0;    ///< impulse of the step
   Phase phase = Phase::Free;  ///< contact status of the step
@@ -44,8 +54,9 @@ class Stepper {
   /// The options as a JSON object text (summary.json "options").
   virtual std::string options_json() const = 0;
   /// Starts from (q0, v0) at t0.
-  virtual void start(double t0, const Vec7& q0, const Vec7& v0) = 0;
-  /// One step from t = t_0 + i h (i = 0, 1, ...): fills `r`; on failure, `message` says why.
+  virtual void start(double t0, const Vec& q0, const Vec& v0) = 0;
+  /// One step from t = t_0 + i h (i = 0, 1, ...): fills `r` (sized for the model: StepReport(n));
+  /// on failure, `message` says why. Allocates nothing.
   virtual StepOutcome step(double t, StepReport& r, std::string& message) = 0;
 };
 

@@ -1,0 +1,66 @@
+#pragma once
+// The column tables of the output files: the one statement of what timeseries.csv and
+// events.csv hold. The writer (output_folder.hpp), the reader (output_reader.hpp), the Python
+// bindings and the Python package all read these tables; none spells the columns out itself.
+//
+// timeseries.csv, for a model with coordinates q_1..q_n and K contacts:
+//   t, <q names>, <rate names>, then per contact d_N, v_N, v_t, F_N, F_T, phase
+// (the coordinates' names from the model, e.g. x_b, ..., theta, ..., omega, ...; with K > 1 the
+// contact columns carry the contact's number: d_N_1, ..., phase_K).
+// events.csv: t, kind, phase_before, phase_after, d_N, v_N_minus, v_N_plus, v_t_minus,
+//   v_t_plus, P_N, P_T, F_N, F_T, t_accumulation, witness, note (and contact, 1-based, when the
+//   model has several contacts).
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "rubdyn/core/run_types.hpp"
+#include "rubdyn/model/coordinates.hpp"
+
+namespace rubdyn {
+
+class LagrangianModel;
+
+/// What a timeseries column holds.
+enum class SampleField {
+  Time,
+  Position,
+  Velocity,
+  Gap,
+  GapRate,
+  SlipSpeed,
+  NormalForce,
+  TangentialForce,
+  Phase
+};
+
+struct SampleColumn {
+  std::string name;
+  SampleField field = SampleField::Time;
+  int index = 0;  ///< the coordinate (Position, Velocity) or the contact (the others)
+  std::string unit;
+};
+
+/// timeseries.csv's columns for a model with these coordinates and `contacts` contacts.
+std::vector<SampleColumn> timeseries_columns(const std::vector<Coordinate>& coords, int contacts);
+std::vector<SampleColumn> timeseries_columns(const LagrangianModel& m);
+
+/// A column's value in a sample, as a number (Phase: its code, the Phase enum value).
+double sample_value(const Sample& s, const SampleColumn& c);
+
+/// What an events column holds.
+enum class EventField { Time, Kind, PhaseBefore, PhaseAfter, Number, Text, Contact };
+
+struct EventColumn {
+  std::string name;
+  EventField field = EventField::Number;
+};
+
+/// events.csv's columns (the contact column only when contacts > 1).
+std::vector<EventColumn> event_columns(int contacts = 1);
+/// A numeric event column's value (Number fields by name: d_N, v_N_minus, ..., t_accumulation).
+double event_number(const EventRecord& e, std::string_view name);
+/// A text column's value (witness, note).
+const std::string& event_text(const EventRecord& e, std::string_view name);
+
+}  // namespace rubdyn

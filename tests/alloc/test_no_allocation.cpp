@@ -1,0 +1,168 @@
+// Hot paths allocate nothing: a solver sizes its workspaces when it is built, and a step, a
+// right-hand side, a witness or an output sample reuses them. Checked by counting every heap
+// allocation of the process (malloc, calloc, realloc; operator new and Eigen go through them)
+// while a run goes on: two runs of the same scene that differ only in their length, with no
+// event in the extra time, must allocate the same number of times. A separate program (not
+// under the sanitizers, which replace malloc themselves).
+#include <atomic>
+#include <catch2/catch.hpp>
+#include <cstddef>
+
+#include "rubdyn/hybrid/event_driven.hpp"
+#include "rubdyn/model/rotor_stator_model.hpp"
+#include "rubdyn/stepping/fixed_step.hpp"
+#include "support/problems.hpp"
+
+extern "C" void* __libc_malloc(std::size_t);
+extern "C" void* __libc_calloc(std::size_t, std::size_t);
+extern "C" void* __libc_realloc(void*, std::size_t);
+
+namespace {
+std::atomic<long> g_allocations{0};
+}  // namespace
+
+extern "C" void* malloc(std::size_t n) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  return __libc_malloc(n);
+}
+extern "C" void* calloc(std::size_t n, std::size_t m) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  return __libc_calloc(n, m);
+}
+extern "C" void* realloc(void* p, std::size_t n) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  return __libc_realloc(p, n);
+}
+
+using namespace rubdyn;
+
+namespace {
+
+/// Discards the output: what is counted is the solver's own allocations.
+class NullSink final : public OutputSink {
+ public:
+  void sample(const Sample&) override {}
+  void event(const EventRecord&) override {}
+  void end(const RunSummary&) override {}
+};
+
+/// Heap allocations of one whole run (set-up included), and the run's event count.
+template <class Run>
+std::pair<long, long> count(Run&& run) {
+  const long before = g_allocations.load();
+  const RunSummary s = run();
+  REQUIRE(s.complete());
+  long events = 0;
+  for (long e : s.events) events += e;
+  return {g_allocations.load() - before, events};
+}
+
+/// The same scene run to t1 and to t2 > t1 allocates the same: nothing per step or sample.
+template <class Run>
+void same_allocations(Run&& run_to, double t1, double t2) {
+  const auto a = count([&] { return run_to(t1); });
+  const auto b = count([&] { return run_to(t2); });
+  INFO("allocations " << a.first << " and " << b.first << ", events " << a.second << " and "
+                      << b.second);
+  REQUIRE(a.second == b.second);  // no event in the extra time (an event may allocate its note)
+  REQUIRE(a.first > 0);           // the counter counts (the set-up allocates)
+  CHECK(a.first == b.first);
+}
+
+const FixedStepScheme kSchemes[] = {FixedStepScheme::CarpOneVC, FixedStepScheme::CarpQN,
+                                    FixedStepScheme::MoreauJean,
+                                    FixedStepScheme::MoreauJeanProjected};
+
+}  // namespace
+
+TEST_CASE("No allocation per step: the rigid rotor in free flight, every solver", "[alloc]") {
+  RotorStatorParams p;
+  p.loads.gravity = 0.0;  // centred and spinning: the gap never closes
+  const RotorStatorModel model(p);
+  MechanicalState s0(RotorStatorModel::kDofs);
+  s0.v[TH] = 2000.0;
+  same_allocations(
+      [&](double t) {
+        NullSink sink;
+        EventDrivenOptions o;
+        o.output_dt = 1e-4;
+        return run_event_driven(model, s0, t, o, sink);
+      },
+      0.01, 0.02);
+  for (auto scheme : kSchemes) {
+    INFO(to_string(scheme));
+    same_allocations(
+        [&](double t) {
+          NullSink sink;
+          FixedStepOptions o;
+          o.scheme = scheme;
+          o.h = 1e-5;
+          return run_fixed_step(model, s0, t, o, sink);
+        },
+        0.01, 0.02);
+  }
+}
+
+TEST_CASE("No allocation per step: the rigid rotor in permanent contact, every solver", "[alloc]") {
+  // resting at the bottom of the clearance without friction and without spin: a contact phase
+  // (slip, frictionless) for the whole run, with its static force
+  RotorStatorParams p;
+  p.contact.mu = 0.0;
+  p.loads.torque = 0.0;
+  const RotorStatorModel model(p);
+  const double mg = p.rotor.mass * p.loads.gravity, nu = model.nu();
+  MechanicalState s0(RotorStatorModel::kDofs);
+  s0.q[YB] = -(1 - nu) * mg / p.bearing.k;
+  s0.q[YS] = -nu * mg / p.stator.k;
+  s0.q[YR] = s0.q[YS] - p.stator.gap;
+  for (auto formulation : {ContactFormulation::Reduced, ContactFormulation::Projection}) {
+    same_allocations(
+        [&](double t) {
+          NullSink sink;
+          EventDrivenOptions o;
+          o.contact_phases = formulation;
+          return run_event_driven(model, s0, t, o, sink);
+        },
+        0.01, 0.02);
+  }
+  for (auto scheme : kSchemes) {
+    INFO(to_string(scheme));
+    same_allocations(
+        [&](double t) {
+          NullSink sink;
+          FixedStepOptions o;
+          o.scheme = scheme;
+          o.h = 1e-5;
+          return run_fixed_step(model, s0, t, o, sink);
+        },
+        0.01, 0.02);
+  }
+}
+
+TEST_CASE("No allocation per step: a 2-dof model (dynamic sizes) sliding, then sticking",
+          "[alloc]") {
+  // the block on the belt slides until t1, then sticks until t2
+  const rubdyn::testing::BlockOnBelt model(0.5, 100.0, 1.0, 0.2);
+  const double t1 = model.stick_time(), t2 = model.slip_time();
+  REQUIRE(t2 > t1 + 0.02);
+  auto event = [&](double t) {
+    NullSink sink;
+    EventDrivenOptions o;
+    o.output_dt = 1e-3;
+    return run_event_driven(model, model.initial(), t, o, sink);
+  };
+  same_allocations(event, t1 / 3.0, 2.0 * t1 / 3.0);  // sliding
+  same_allocations(event, t1 + 0.01, t1 + 0.02);      // sticking (after the one stick event)
+  for (auto scheme : kSchemes) {
+    INFO(to_string(scheme));
+    auto fixed = [&](double t) {
+      NullSink sink;
+      FixedStepOptions o;
+      o.scheme = scheme;
+      o.h = 1e-5;
+      o.output_dt = 1e-3;
+      return run_fixed_step(model, model.initial(), t, o, sink);
+    };
+    same_allocations(fixed, 0.01, 0.02);
+  }
+}
