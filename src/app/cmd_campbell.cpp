@@ -7,6 +7,7 @@
 #include <fstream>
 #include <memory>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 
 #include "cli_common.hpp"
@@ -14,6 +15,7 @@
 #include "rubdyn/analysis/campbell.hpp"
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/io/text_files.hpp"
 
 namespace rubdyn::app {
@@ -30,12 +32,14 @@ struct CampbellArgs {
 };
 
 void print_point(const CampbellPoint& p, bool damped) {
-  std::printf("  Omega %9.2f rad/s (%8.0f rpm): f1b %8.3f  f1f %8.3f  f2b %8.3f  f2f %8.3f Hz\n",
-              p.omega, p.omega * 30.0 / std::numbers::pi, p.f1b, p.f1f, p.f2b, p.f2f);
-  if (damped) {
-    std::printf("  %37s zeta %8.5f      %8.5f      %8.5f      %8.5f\n", "", p.zeta_1b, p.zeta_1f,
-                p.zeta_2b, p.zeta_2f);
+  std::string f, z;
+  for (std::size_t k = 0; k < p.f_forward.size(); ++k) {
+    f += fmt::format("  f{}b {:8.3f}  f{}f {:8.3f}", k + 1, p.f_backward[k], k + 1, p.f_forward[k]);
+    z += fmt::format("  zeta {:8.5f}       {:8.5f}", p.zeta_backward[k], p.zeta_forward[k]);
   }
+  std::printf("  Omega %9.2f rad/s (%8.0f rpm):%s Hz\n", p.omega, p.omega * 30.0 / std::numbers::pi,
+              f.c_str());
+  if (damped) std::printf("  %33s%s\n", "", z.c_str());
 }
 
 int campbell_command(const CampbellArgs& a) {
@@ -60,24 +64,41 @@ int campbell_command(const CampbellArgs& a) {
   if (!bad.empty()) throw CaseError(bad);
 
   const double omega_max = a.omega_max_given ? a.omega_max : spec.run.omega_lim;
-  const CampbellDiagram d = compute_campbell_diagram(spec.params, omega_max, a.points, a.damped);
+  // the model's linearisation with the stator tied to the rotor (the paper's coupled system);
+  // a model whose tied system has nothing left to vibrate (a rigid stator pins the rotor) gives
+  // its free modes instead
+  const auto model = build_model(spec);
+  std::optional<LinearModel> lm = model->linearize(Linearization::Tied);
+  bool tied = true;
+  if (!lm || lm->size() == 0) {
+    lm = model->linearize(Linearization::Free);
+    tied = false;
+  }
+  if (!lm || lm->size() == 0) {
+    throw CaseError({{spec.source, 0, "model.kind", spec.model,
+                      "this model has no linearisation for a Campbell diagram"}});
+  }
+  const CampbellDiagram d = compute_campbell_diagram(*lm, omega_max, a.points, a.damped);
 
   const std::string dir = a.out.empty() ? output_folder(spec) : a.out;
   std::filesystem::create_directories(dir);
   const std::string path = (std::filesystem::path(dir) / "campbell.csv").string();
   write_file_atomic(path, campbell_csv(d));  // every write checked, close included
 
-  const CampbellSolver solver(spec.params, a.damped);
-  std::printf("Campbell diagram of %s: coupled rotor + stator, %s, %d speeds from 0 to %g rad/s\n",
-              spec.name.c_str(), a.damped ? "damped" : "undamped", a.points, omega_max);
+  const CampbellSolver solver(*lm, a.damped);
+  std::printf("Campbell diagram of %s (%s): %s, %s, %d speeds from 0 to %g rad/s\n",
+              spec.name.c_str(), spec.model.c_str(),
+              tied ? "the stator tied to the rotor" : "no contact (the stator is rigid)",
+              a.damped ? "damped" : "undamped", a.points, omega_max);
   print_point(solver.solve(0.0), a.damped);
   print_point(solver.solve(omega_max), a.damped);
   std::printf("  written to %s\n", path.c_str());
   if (!d.labels_ok()) {
     std::fprintf(stderr,
-                 "rubdyn campbell: at %zu of %d speeds (first: %g rad/s) the modes are not two "
-                 "forward and two backward with a clear whirl (NaN or doubtful labels there)\n",
-                 d.unlabelled.size(), a.points, d.unlabelled.front());
+                 "rubdyn campbell: at %zu of %d speeds (first: %g rad/s) the modes are not %d "
+                 "forward and %d backward with a clear whirl (NaN or doubtful labels there)\n",
+                 d.unlabelled.size(), a.points, d.unlabelled.front(), solver.nodes(),
+                 solver.nodes());
     return 3;
   }
   return 0;

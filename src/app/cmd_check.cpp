@@ -18,8 +18,75 @@ void row(const std::string& label, double value, const std::string& unit) {
   fmt::print("  {:<36}{:>14.6g} {}\n", label, value, unit);
 }
 
+void spin_rows(double omega0, double omega_lim, FreeAcceleration a, double t, const char* how) {
+  const double rpm = 30.0 / std::numbers::pi;
+  fmt::print("spin speed\n");
+  row("omega0", omega0, fmt::format("rad/s = {:.6g} rpm", omega0 * rpm));
+  row("omega_lim", omega_lim, fmt::format("rad/s = {:.6g} rpm", omega_lim * rpm));
+  switch (a) {
+    case FreeAcceleration::reaches: row("free acceleration to omega_lim", t, how); break;
+    case FreeAcceleration::already_reached:
+      fmt::print("  free acceleration: omega0 >= omega_lim, already reached (0 s)\n");
+      break;
+    case FreeAcceleration::never:
+      fmt::print("  free acceleration: never reaches omega_lim (no driving torque there)\n");
+      break;
+  }
+}
+
+int check_jeffcott(const CaseSpec& c) {
+  const auto& p = c.jeffcott;
+  const double omega0 = c.initial.v0[JeffcottModel::TH], omega_lim = c.run.omega_lim;
+  const JeffcottQuantities d = compute_jeffcott_quantities(p, omega0, omega_lim);
+  fmt::print("case {} ({}): valid\n", c.name, c.source);
+  fmt::print("model jeffcott: a disc on a massless shaft, {} stator\n",
+             p.stator.rigid ? "a rigid" : "a sprung");
+  fmt::print("natural frequencies without contact (no gyroscopic effect: forward = backward)\n");
+  row("rotor sqrt(k_r/m_r) / 2pi", d.f_rotor, fmt::format("Hz (zeta {:.4g})", d.zeta_rotor));
+  if (!p.stator.rigid) {
+    row("stator sqrt(k_s/m_s) / 2pi", d.f_stator, fmt::format("Hz (zeta {:.4g})", d.zeta_stator));
+    row("tied sqrt((k_r+k_s)/(m_r+m_s)) / 2pi", d.f_tied, "Hz");
+  }
+  fmt::print("static equilibrium under gravity\n");
+  row("rotor sag -m_r g / k_r", d.sag_rotor, "m");
+  if (!p.stator.rigid) row("stator sag -m_s g / k_s", d.sag_stator, "m");
+  if (d.rests_on_stator) {
+    fmt::print("  the sags close the clearance: the rotor rests on the stator\n");
+    row("contact force F_N", d.F_N, "N");
+    row("rotor  y_r", d.y_r, "m");
+    if (!p.stator.rigid) row("stator y_s", d.y_s, "m");
+  } else {
+    fmt::print("  the rotor hangs free inside the clearance (F_N = 0)\n");
+  }
+  if (p.loads.unbalance > 0.0) {
+    fmt::print("unbalance\n");
+    row("eccentricity eps = u_b / m_r", d.eps, "m");
+    row("inertia about G, J - u_b^2 / m_r", d.J_G, "kg m^2");
+    row("free steady whirl radius at omega0", d.unbalance_orbit,
+        fmt::format("m ({:.3g} g0)", d.unbalance_orbit / p.stator.gap));
+  }
+  if (d.rolling_closed_form) {
+    fmt::print("rolling on the rigid stator under the constant torque (closed form)\n");
+    row("steady spin tau / (c_r R^2)", d.rolling_omega, "rad/s");
+    row("whirl -(R / g0) Omega", d.rolling_whirl, "rad/s");
+    row("contact force g0 (m_r w^2 - k_r)", d.rolling_F_N, "N");
+    row("time constant (J + m_r R^2)/(c_r R^2)", d.rolling_time_constant, "s");
+  }
+  if (p.loads.spin == SpinDrive::Prescribed) {
+    fmt::print("prescribed spin: omega(t) = omega0 + {:.6g} (t - t_start) rad/s\n",
+               p.loads.spin_accel);
+  }
+  spin_rows(omega0, omega_lim, d.free_acceleration, d.t_free_to_omega_lim,
+            p.loads.spin == SpinDrive::Prescribed ? "s = (omega_lim - omega0) / spin_accel"
+            : p.loads.torque_law == TorqueLaw::Linear
+                ? "s (the linear torque law, without contact)"
+                : "s = (omega_lim - omega0) J / tau_a (without contact)");
+  return 0;
+}
+
 int check_command(const CaseArgs& a) {
   const CaseSpec c = load_case(a.path, a.sets);  // throws CaseError: exit 2
+  if (c.model == "jeffcott") return check_jeffcott(c);
   const double omega0 = c.initial.v0[TH], omega_lim = c.run.omega_lim;
   const DerivedQuantities d = compute_derived_quantities(c.params, omega0, omega_lim);
   const double rpm = 30.0 / std::numbers::pi;

@@ -18,6 +18,7 @@
 #include "rubdyn/hybrid/event_driven.hpp"
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/io/solver_registry.hpp"
 #include "rubdyn/io/text_files.hpp"
 #include "rubdyn/stepping/fixed_step.hpp"
@@ -26,92 +27,253 @@ namespace rubdyn {
 
 namespace {
 
-enum class Kind { Number, Integer, String };
+enum class Kind { Number, Integer, String, Bool, Choice };
 
-/// One key of the schema: where it goes in CaseSpec, whether it is required, its type.
+/// One key of the schema: where it goes in CaseSpec, when it is required or refused, its type.
 struct KeySpec {
-  const char* section;
-  const char* key;
-  Kind kind;
-  bool required;
+  std::string section, key;
+  Kind kind = Kind::Number;
+  /// Required in this case (empty: optional).
+  std::function<bool(const CaseSpec&)> required;
+  /// Why the key must not be given in this case ("": accepted; empty function: always).
+  std::function<std::string(const CaseSpec&)> refused;
   std::function<double*(CaseSpec&)> num;        // Number
   std::function<int*(CaseSpec&)> integer;       // Integer
   std::function<std::string*(CaseSpec&)> text;  // String
+  std::function<bool*(CaseSpec&)> flag;         // Bool
+  // Choice: one of `choices`, stored by set/get
+  std::vector<std::string> choices;
+  std::function<std::string(const CaseSpec&)> get;
+  std::function<void(CaseSpec&, const std::string&)> set;
+  std::string full() const { return section + "." + key; }
 };
 
-const std::vector<KeySpec>& schema() {
-  static const std::vector<KeySpec> s = [] {
-    std::vector<KeySpec> v;
-    auto num = [&v](const char* sec, const char* key, bool req,
-                    std::function<double*(CaseSpec&)> f) {
-      v.push_back({sec, key, Kind::Number, req, std::move(f), {}, {}});
-    };
-    auto integer = [&v](const char* sec, const char* key, std::function<int*(CaseSpec&)> f) {
-      v.push_back({sec, key, Kind::Integer, false, {}, std::move(f), {}});
-    };
-    auto text = [&v](const char* sec, const char* key, std::function<std::string*(CaseSpec&)> f) {
-      v.push_back({sec, key, Kind::String, false, {}, {}, std::move(f)});
-    };
-    num("rotor", "mass", true, [](CaseSpec& c) { return &c.params.rotor.mass; });
-    num("rotor", "Jd", true, [](CaseSpec& c) { return &c.params.rotor.Jd; });
-    num("rotor", "Jp", true, [](CaseSpec& c) { return &c.params.rotor.Jp; });
-    num("rotor", "L", true, [](CaseSpec& c) { return &c.params.rotor.L; });
-    num("rotor", "delta", true, [](CaseSpec& c) { return &c.params.rotor.delta; });
-    num("rotor", "d", true, [](CaseSpec& c) { return &c.params.rotor.d; });
-    num("rotor", "radius", true, [](CaseSpec& c) { return &c.params.rotor.radius; });
-    num("bearing", "k", true, [](CaseSpec& c) { return &c.params.bearing.k; });
-    num("bearing", "c", true, [](CaseSpec& c) { return &c.params.bearing.c; });
-    num("stator", "mass", true, [](CaseSpec& c) { return &c.params.stator.mass; });
-    num("stator", "k", true, [](CaseSpec& c) { return &c.params.stator.k; });
-    num("stator", "c", true, [](CaseSpec& c) { return &c.params.stator.c; });
-    num("stator", "gap", true, [](CaseSpec& c) { return &c.params.stator.gap; });
-    num("contact", "mu", true, [](CaseSpec& c) { return &c.params.contact.mu; });
-    num("contact", "e_n", false, [](CaseSpec& c) { return &c.params.contact.e_n; });
-    num("contact", "e_t", false, [](CaseSpec& c) { return &c.params.contact.e_t; });
-    num("loads", "gravity", true, [](CaseSpec& c) { return &c.params.loads.gravity; });
-    num("loads", "torque", true, [](CaseSpec& c) { return &c.params.loads.torque; });
-    // the keys of the initial state are the model's coordinates and their rates
-    static const RotorStatorModel model{RotorStatorParams{}};
-    const auto& coords = model.coordinates();
-    for (std::size_t i = 0; i < coords.size(); ++i) {
-      const auto k = static_cast<Eigen::Index>(i);
-      num("initial", coords[i].name.c_str(), false, [k](CaseSpec& c) { return &c.initial.q0[k]; });
-    }
-    for (std::size_t i = 0; i < coords.size(); ++i) {
-      const auto k = static_cast<Eigen::Index>(i);
-      num("initial", coords[i].rate_key.c_str(), false,
-          [k](CaseSpec& c) { return &c.initial.v0[k]; });
-    }
-    num("run", "t_start", false, [](CaseSpec& c) { return &c.run.t_start; });
-    num("run", "t_end", true, [](CaseSpec& c) { return &c.run.t_end; });
-    num("run", "omega_lim", true, [](CaseSpec& c) { return &c.run.omega_lim; });
-    num("run", "max_wall", false, [](CaseSpec& c) { return &c.run.max_wall; });
-    text("solver", "kind", [](CaseSpec& c) { return &c.solver.kind; });
-    num("solver", "rtol", false, [](CaseSpec& c) { return &c.solver.rtol; });
-    num("solver", "atol", false, [](CaseSpec& c) { return &c.solver.atol; });
-    text("solver", "method", [](CaseSpec& c) { return &c.solver.method; });
-    text("solver", "contact_phases", [](CaseSpec& c) { return &c.solver.contact_phases; });
-    text("solver", "contact_method", [](CaseSpec& c) { return &c.solver.contact_method; });
-    num("solver", "max_events_per_second", false,
-        [](CaseSpec& c) { return &c.solver.max_events_per_second; });
-    num("solver", "h", false, [](CaseSpec& c) { return &c.solver.h; });
-    integer("solver", "itmax", [](CaseSpec& c) { return &c.solver.itmax; });
-    num("solver", "qn_tol", false, [](CaseSpec& c) { return &c.solver.qn_tol; });
-    num("solver", "theta", false, [](CaseSpec& c) { return &c.solver.theta; });
-    num("solver", "eta", false, [](CaseSpec& c) { return &c.solver.eta; });
-    text("solver", "projection", [](CaseSpec& c) { return &c.solver.projection; });
-    num("output", "dt", false, [](CaseSpec& c) { return &c.output.dt; });
-    integer("output", "every", [](CaseSpec& c) { return &c.output.every; });
-    text("output", "folder", [](CaseSpec& c) { return &c.output.folder; });
-    return v;
-  }();
-  return s;
+/// Builds a schema: the keys in the order of case.resolved.toml.
+class SchemaBuilder {
+ public:
+  using Pred = std::function<bool(const CaseSpec&)>;
+  using Why = std::function<std::string(const CaseSpec&)>;
+  void num(const std::string& sec, const std::string& key, bool req,
+           std::function<double*(CaseSpec&)> f, Why refused = {}, Pred req_if = {}) {
+    KeySpec k = make(sec, key, Kind::Number);
+    k.refused = std::move(refused);
+    k.required = req ? Pred([](const CaseSpec&) { return true; }) : std::move(req_if);
+    k.num = std::move(f);
+    keys.push_back(std::move(k));
+  }
+  void integer(const std::string& sec, const std::string& key, std::function<int*(CaseSpec&)> f) {
+    KeySpec k = make(sec, key, Kind::Integer);
+    k.integer = std::move(f);
+    keys.push_back(std::move(k));
+  }
+  void text(const std::string& sec, const std::string& key,
+            std::function<std::string*(CaseSpec&)> f) {
+    KeySpec k = make(sec, key, Kind::String);
+    k.text = std::move(f);
+    keys.push_back(std::move(k));
+  }
+  void flag(const std::string& sec, const std::string& key, std::function<bool*(CaseSpec&)> f) {
+    KeySpec k = make(sec, key, Kind::Bool);
+    k.flag = std::move(f);
+    keys.push_back(std::move(k));
+  }
+  void choice(const std::string& sec, const std::string& key, std::vector<std::string> words,
+              std::function<std::string(const CaseSpec&)> get,
+              std::function<void(CaseSpec&, const std::string&)> set, Why refused = {}) {
+    KeySpec k = make(sec, key, Kind::Choice);
+    k.refused = std::move(refused);
+    k.choices = std::move(words);
+    k.get = std::move(get);
+    k.set = std::move(set);
+    keys.push_back(std::move(k));
+  }
+  std::vector<KeySpec> keys;
+
+ private:
+  static KeySpec make(const std::string& sec, const std::string& key, Kind kind) {
+    KeySpec k;
+    k.section = sec;
+    k.key = key;
+    k.kind = kind;
+    return k;
+  }
+};
+
+// ---- each model's own keys -------------------------------------------------------------------
+
+void rigid_rotor_keys(SchemaBuilder& b) {
+  b.num("rotor", "mass", true, [](CaseSpec& c) { return &c.params.rotor.mass; });
+  b.num("rotor", "Jd", true, [](CaseSpec& c) { return &c.params.rotor.Jd; });
+  b.num("rotor", "Jp", true, [](CaseSpec& c) { return &c.params.rotor.Jp; });
+  b.num("rotor", "L", true, [](CaseSpec& c) { return &c.params.rotor.L; });
+  b.num("rotor", "delta", true, [](CaseSpec& c) { return &c.params.rotor.delta; });
+  b.num("rotor", "d", true, [](CaseSpec& c) { return &c.params.rotor.d; });
+  b.num("rotor", "radius", true, [](CaseSpec& c) { return &c.params.rotor.radius; });
+  b.num("bearing", "k", true, [](CaseSpec& c) { return &c.params.bearing.k; });
+  b.num("bearing", "c", true, [](CaseSpec& c) { return &c.params.bearing.c; });
+  b.num("stator", "mass", true, [](CaseSpec& c) { return &c.params.stator.mass; });
+  b.num("stator", "k", true, [](CaseSpec& c) { return &c.params.stator.k; });
+  b.num("stator", "c", true, [](CaseSpec& c) { return &c.params.stator.c; });
+  b.num("stator", "gap", true, [](CaseSpec& c) { return &c.params.stator.gap; });
 }
 
-const std::vector<std::string>& section_names() {
-  static const std::vector<std::string> s = {"rotor",   "bearing", "stator", "contact", "loads",
-                                             "initial", "run",     "solver", "output"};
-  return s;
+void jeffcott_keys(SchemaBuilder& b) {
+  b.num("rotor", "mass", true, [](CaseSpec& c) { return &c.jeffcott.rotor.mass; });
+  b.num("rotor", "k", true, [](CaseSpec& c) { return &c.jeffcott.rotor.k; });
+  b.num("rotor", "c", true, [](CaseSpec& c) { return &c.jeffcott.rotor.c; });
+  b.num("rotor", "radius", true, [](CaseSpec& c) { return &c.jeffcott.rotor.radius; });
+  b.num("rotor", "Jp", true, [](CaseSpec& c) { return &c.jeffcott.rotor.Jp; });
+  b.flag("stator", "rigid", [](CaseSpec& c) { return &c.jeffcott.stator.rigid; });
+  // a rigid stator is a fixed ring: no mass, spring or damper, and no coordinates
+  const auto sprung = [](const CaseSpec& c) { return !c.jeffcott.stator.rigid; };
+  const auto rigid_refuses = [](const CaseSpec& c) {
+    return c.jeffcott.stator.rigid
+               ? std::string(
+                     "a rigid stator (stator.rigid = true) is a fixed ring without "
+                     "mass, spring or damper: remove this key")
+               : std::string();
+  };
+  b.num(
+      "stator", "mass", false, [](CaseSpec& c) { return &c.jeffcott.stator.mass; }, rigid_refuses,
+      sprung);
+  b.num(
+      "stator", "k", false, [](CaseSpec& c) { return &c.jeffcott.stator.k; }, rigid_refuses,
+      sprung);
+  b.num(
+      "stator", "c", false, [](CaseSpec& c) { return &c.jeffcott.stator.c; }, rigid_refuses,
+      sprung);
+  b.num("stator", "gap", true, [](CaseSpec& c) { return &c.jeffcott.stator.gap; });
+}
+
+// ---- what every model has --------------------------------------------------------------------
+
+void contact_and_load_keys(SchemaBuilder& b) {
+  b.num("contact", "mu", true, [](CaseSpec& c) { return &c.contact().mu; });
+  b.num("contact", "e_n", false, [](CaseSpec& c) { return &c.contact().e_n; });
+  b.num("contact", "e_t", false, [](CaseSpec& c) { return &c.contact().e_t; });
+  using S = const CaseSpec&;
+  const auto torque_driven = [](S c) { return c.loads().spin == SpinDrive::Torque; };
+  const auto prescribed_refuses = [](S c) {
+    return c.loads().spin == SpinDrive::Prescribed
+               ? std::string(
+                     "not read with loads.spin = \"prescribed\": the torque that holds "
+                     "the speed is an output (timeseries.csv drive_torque)")
+               : std::string();
+  };
+  b.num("loads", "gravity", true, [](CaseSpec& c) { return &c.loads().gravity; });
+  b.choice(
+      "loads", "spin", {"torque", "prescribed"},
+      [](S c) { return std::string(to_string(c.loads().spin)); },
+      [](CaseSpec& c, const std::string& w) {
+        c.loads().spin = w == "prescribed" ? SpinDrive::Prescribed : SpinDrive::Torque;
+      });
+  b.num(
+      "loads", "torque", false, [](CaseSpec& c) { return &c.loads().torque; }, prescribed_refuses,
+      torque_driven);
+  b.choice(
+      "loads", "torque_law", {"constant", "linear"},
+      [](S c) { return std::string(to_string(c.loads().torque_law)); },
+      [](CaseSpec& c, const std::string& w) {
+        c.loads().torque_law = w == "linear" ? TorqueLaw::Linear : TorqueLaw::Constant;
+      },
+      prescribed_refuses);
+  b.num(
+      "loads", "torque_free_speed", false, [](CaseSpec& c) { return &c.loads().torque_free_speed; },
+      [](S c) {
+        return c.loads().spin == SpinDrive::Torque && c.loads().torque_law == TorqueLaw::Linear
+                   ? std::string()
+                   : std::string(
+                         "read only with loads.torque_law = \"linear\" (and a spin "
+                         "driven by the torque)");
+      },
+      [](S c) {
+        return c.loads().spin == SpinDrive::Torque && c.loads().torque_law == TorqueLaw::Linear;
+      });
+  b.num(
+      "loads", "spin_accel", false, [](CaseSpec& c) { return &c.loads().spin_accel; },
+      [](S c) {
+        return c.loads().spin == SpinDrive::Prescribed
+                   ? std::string()
+                   : std::string("read only with loads.spin = \"prescribed\"");
+      });
+  b.num("loads", "unbalance", false, [](CaseSpec& c) { return &c.loads().unbalance; });
+  b.num("loads", "unbalance_phase", false, [](CaseSpec& c) { return &c.loads().unbalance_phase; });
+}
+
+void initial_keys(SchemaBuilder& b, const CaseSpec& c) {
+  // the model's coordinates and their rates (io/model_registry.hpp)
+  const std::vector<Coordinate> coords = initial_coordinates(c);
+  for (std::size_t i = 0; i < coords.size(); ++i) {
+    const auto k = static_cast<Eigen::Index>(i);
+    b.num("initial", coords[i].name, false, [k](CaseSpec& s) { return &s.initial.q0[k]; });
+  }
+  for (std::size_t i = 0; i < coords.size(); ++i) {
+    const auto k = static_cast<Eigen::Index>(i);
+    b.num("initial", coords[i].rate_key, false, [k](CaseSpec& s) { return &s.initial.v0[k]; });
+  }
+}
+
+void run_solver_output_keys(SchemaBuilder& b) {
+  b.num("run", "t_start", false, [](CaseSpec& c) { return &c.run.t_start; });
+  b.num("run", "t_end", true, [](CaseSpec& c) { return &c.run.t_end; });
+  b.num("run", "omega_lim", true, [](CaseSpec& c) { return &c.run.omega_lim; });
+  b.num("run", "max_wall", false, [](CaseSpec& c) { return &c.run.max_wall; });
+  b.text("solver", "kind", [](CaseSpec& c) { return &c.solver.kind; });
+  b.num("solver", "rtol", false, [](CaseSpec& c) { return &c.solver.rtol; });
+  b.num("solver", "atol", false, [](CaseSpec& c) { return &c.solver.atol; });
+  b.text("solver", "method", [](CaseSpec& c) { return &c.solver.method; });
+  b.text("solver", "contact_phases", [](CaseSpec& c) { return &c.solver.contact_phases; });
+  b.text("solver", "contact_method", [](CaseSpec& c) { return &c.solver.contact_method; });
+  b.num("solver", "max_events_per_second", false,
+        [](CaseSpec& c) { return &c.solver.max_events_per_second; });
+  b.num("solver", "h", false, [](CaseSpec& c) { return &c.solver.h; });
+  b.integer("solver", "itmax", [](CaseSpec& c) { return &c.solver.itmax; });
+  b.num("solver", "qn_tol", false, [](CaseSpec& c) { return &c.solver.qn_tol; });
+  b.num("solver", "theta", false, [](CaseSpec& c) { return &c.solver.theta; });
+  b.num("solver", "eta", false, [](CaseSpec& c) { return &c.solver.eta; });
+  b.text("solver", "projection", [](CaseSpec& c) { return &c.solver.projection; });
+  b.num("output", "dt", false, [](CaseSpec& c) { return &c.output.dt; });
+  b.integer("output", "every", [](CaseSpec& c) { return &c.output.every; });
+  b.text("output", "folder", [](CaseSpec& c) { return &c.output.folder; });
+}
+
+/// Every key of a case of c's model with c's flags (stator.rigid, loads.spin, loads.torque_law),
+/// in the order of case.resolved.toml.
+std::vector<KeySpec> schema(const CaseSpec& c) {
+  SchemaBuilder b;
+  b.text("model", "kind", [](CaseSpec& s) { return &s.model; });
+  if (c.model == "jeffcott") {
+    jeffcott_keys(b);
+  } else if (c.model == "rigid-rotor") {
+    rigid_rotor_keys(b);
+  }
+  contact_and_load_keys(b);
+  if (find_model(c.model)) initial_keys(b, c);
+  run_solver_output_keys(b);
+  return b.keys;
+}
+
+/// The sections of every model, and which models have each key (for the messages about a key
+/// of another model).
+struct AllModels {
+  std::vector<std::string> sections;
+  std::map<std::string, std::vector<std::string>> owners;  // section.key -> kinds
+};
+const AllModels& all_models() {
+  static const AllModels all = [] {
+    AllModels a;
+    for (const auto& e : model_registry()) {
+      CaseSpec c;
+      c.model = std::string(e.kind);
+      for (const auto& k : schema(c)) {
+        if (std::find(a.sections.begin(), a.sections.end(), k.section) == a.sections.end())
+          a.sections.push_back(k.section);
+        a.owners[k.full()].push_back(c.model);
+      }
+    }
+    return a;
+  }();
+  return all;
 }
 
 std::size_t edit_distance(const std::string& a, const std::string& b) {
@@ -175,11 +337,18 @@ class Loader {
     CaseSpec c;
     c.source = source_;
     c.name = std::filesystem::path(source_).stem().string();
-    check_structure(doc, c);
-    read_values(doc, c);
+    // The model and its flags first: they decide which keys the case has (a rigid stator has
+    // no stator coordinates; a prescribed spin no drive torque).
+    read_model(doc, c);
+    const std::vector<KeySpec> keys = schema(c);
+    const std::size_t n = initial_coordinates_or_none(c);
+    c.initial.q0 = Vec::Zero(static_cast<Eigen::Index>(n));
+    c.initial.v0 = Vec::Zero(static_cast<Eigen::Index>(n));
+    check_structure(doc, c, keys);
+    read_values(doc, c, keys);
     // Rules run even when other keys have problems, so that every problem is reported at once.
     // A key that is missing or of the wrong type keeps its (valid) default and so adds nothing.
-    check_rules(c);
+    if (model_known_) check_rules(c);
     if (!issues_.empty()) throw CaseError(issues_);
     return c;
   }
@@ -231,7 +400,58 @@ class Loader {
     }
   }
 
-  void check_structure(const toml::table& doc, CaseSpec& c) {
+  std::size_t initial_coordinates_or_none(const CaseSpec& c) const {
+    return model_known_ ? initial_coordinates(c).size() : 0;
+  }
+
+  /// [model] kind and the flags the schema depends on (stator.rigid, loads.spin,
+  /// loads.torque_law), read with the same rules as every key (read_values reads them again).
+  void read_model(const toml::table& doc, CaseSpec& c) {
+    const toml::node* sec = doc.get("model");
+    const toml::node* kind = sec && sec->is_table() ? sec->as_table()->get("kind") : nullptr;
+    if (kind) {
+      if (auto s = kind->as_string()) {
+        c.model = s->get();
+      } else {
+        model_known_ = false;  // reported by read_values ("must be a string")
+        return;
+      }
+    }
+    if (!find_model(c.model)) {
+      std::vector<std::string> kinds;
+      for (const auto& e : model_registry()) kinds.emplace_back(e.kind);
+      issue("model.kind", kind, "\"" + c.model + "\"",
+            "must be one of " + model_names(", ") + suggestion(c.model, kinds));
+      model_known_ = false;
+      c.model = "rigid-rotor";  // (its keys are still read, so that the rest is checked)
+      return;
+    }
+    for (const auto& k : schema(c)) {
+      const std::string full = k.full();
+      if (full != "stator.rigid" && full != "loads.spin" && full != "loads.torque_law") continue;
+      const toml::node* s = doc.get(k.section);
+      const toml::node* n = s && s->is_table() ? s->as_table()->get(k.key) : nullptr;
+      if (!n) continue;
+      if (k.kind == Kind::Bool) {
+        if (auto b = n->as_boolean()) *k.flag(c) = b->get();
+      } else if (auto w = n->as_string()) {
+        if (std::find(k.choices.begin(), k.choices.end(), w->get()) != k.choices.end())
+          k.set(c, w->get());
+      }
+    }
+  }
+
+  void check_structure(const toml::table& doc, CaseSpec& c, const std::vector<KeySpec>& keys) {
+    std::vector<std::string> sections;
+    for (const auto& k : keys)
+      if (std::find(sections.begin(), sections.end(), k.section) == sections.end())
+        sections.push_back(k.section);
+    const AllModels& all = all_models();
+    auto owners_text = [](const std::vector<std::string>& kinds) {
+      std::string t;
+      for (const auto& k : kinds) t += (t.empty() ? "'" : ", '") + k + "'";
+      return t;
+    };
     for (const auto& [k, node] : doc) {
       const std::string key(k.str());
       if (key == "name") {
@@ -242,10 +462,17 @@ class Loader {
         }
         continue;
       }
-      if (std::find(section_names().begin(), section_names().end(), key) == section_names().end()) {
-        auto sections = section_names();
-        sections.push_back("name");
-        issue(key, &node, "", "unknown section" + suggestion(key, sections));
+      if (std::find(sections.begin(), sections.end(), key) == sections.end()) {
+        if (model_known_ &&
+            std::find(all.sections.begin(), all.sections.end(), key) != all.sections.end()) {
+          issue(key, &node, "",
+                fmt::format("not a section of model '{}' ([model] kind; a section of {})", c.model,
+                            other_models_with_section(key, c.model)));
+          continue;
+        }
+        auto candidates = sections;
+        candidates.push_back("name");
+        issue(key, &node, "", "unknown section" + suggestion(key, candidates));
         continue;
       }
       const toml::table* sec = node.as_table();
@@ -254,30 +481,79 @@ class Loader {
         continue;
       }
       std::vector<std::string> known;
-      for (const auto& ks : schema())
+      for (const auto& ks : keys)
         if (key == ks.section) known.push_back(ks.key);
       for (const auto& [kk, vv] : *sec) {
         const std::string name(kk.str());
-        if (std::find(known.begin(), known.end(), name) == known.end()) {
-          issue(key + "." + name, &vv, node_text(vv), "unknown key" + suggestion(name, known));
+        const std::string full = key + "." + name;
+        const auto it = std::find_if(keys.begin(), keys.end(),
+                                     [&](const KeySpec& ks) { return ks.full() == full; });
+        if (it == keys.end()) {
+          const auto own = all.owners.find(full);
+          const bool ours =
+              own != all.owners.end() &&
+              std::find(own->second.begin(), own->second.end(), c.model) != own->second.end();
+          if (model_known_ && own != all.owners.end() && !ours) {
+            issue(full, &vv, node_text(vv),
+                  fmt::format("not a key of model '{}' ([model] kind; a key of {})", c.model,
+                              owners_text(own->second)));
+          } else if (key == "initial" && model_known_) {
+            issue(full, &vv, node_text(vv),
+                  fmt::format("not a coordinate of this case's model '{}' (its coordinates: "
+                              "{}){}",
+                              c.model, coordinate_list(c),
+                              c.model == "jeffcott" && c.jeffcott.stator.rigid
+                                  ? "; a rigid stator (stator.rigid = true) has no coordinates"
+                                  : ""));
+          } else {
+            issue(full, &vv, node_text(vv), "unknown key" + suggestion(name, known));
+          }
+          continue;
+        }
+        if (it->refused) {
+          const std::string why = it->refused(c);
+          if (!why.empty()) issue(full, &vv, node_text(vv), why);
         }
       }
     }
   }
 
-  void read_values(const toml::table& doc, CaseSpec& c) {
-    for (const auto& ks : schema()) {
-      const std::string full = std::string(ks.section) + "." + ks.key;
+  static std::string other_models_with_section(const std::string& section,
+                                               const std::string& except) {
+    std::string t;
+    for (const auto& e : model_registry()) {
+      if (e.kind == except) continue;
+      CaseSpec c;
+      c.model = std::string(e.kind);
+      for (const auto& k : schema(c))
+        if (k.section == section) {
+          t += (t.empty() ? "'" : ", '") + std::string(e.kind) + "'";
+          break;
+        }
+    }
+    return t;
+  }
+
+  static std::string coordinate_list(const CaseSpec& c) {
+    std::string t;
+    for (const auto& x : initial_coordinates(c)) t += (t.empty() ? "" : ", ") + x.name;
+    return t;
+  }
+
+  void read_values(const toml::table& doc, CaseSpec& c, const std::vector<KeySpec>& keys) {
+    for (const auto& ks : keys) {
+      const std::string full = ks.full();
       const toml::node* sec = doc.get(ks.section);
       const toml::node* n = sec && sec->is_table() ? sec->as_table()->get(ks.key) : nullptr;
       if (!n) {
-        if (ks.required) {
+        if (ks.required && ks.required(c) && (model_known_ || !model_section(ks.section))) {
           issues_.push_back({source_, sec ? static_cast<int>(sec->source().begin.line) : 0, full,
                              "", "required key is missing"});
         }
         continue;
       }
       present_[full] = n;
+      if (ks.refused && !ks.refused(c).empty()) continue;  // reported by check_structure
       switch (ks.kind) {
         case Kind::Number: {
           double v = 0.0;
@@ -313,13 +589,38 @@ class Loader {
           break;
         case Kind::String:
           if (auto s = n->as_string()) {
-            *ks.text(c) = s->get();
+            if (full != "model.kind") *ks.text(c) = s->get();  // (read_model has it)
           } else {
             issue(full, n, node_text(*n), "must be a string");
           }
           break;
+        case Kind::Bool:
+          if (auto b = n->as_boolean()) {
+            *ks.flag(c) = b->get();
+          } else {
+            issue(full, n, node_text(*n), "must be true or false");
+          }
+          break;
+        case Kind::Choice:
+          if (auto s = n->as_string();
+              s && std::find(ks.choices.begin(), ks.choices.end(), s->get()) != ks.choices.end()) {
+            ks.set(c, s->get());
+          } else {
+            std::string words;
+            for (const auto& w : ks.choices) words += (words.empty() ? "\"" : ", \"") + w + "\"";
+            issue(full, n, node_text(*n), "must be one of " + words);
+          }
+          break;
       }
     }
+  }
+
+  /// A section that only some models have (their own, not [contact], [loads], [run], ...).
+  static bool model_section(const std::string& section) {
+    for (const auto& e : model_registry())
+      for (auto s : e.sections)
+        if (s == section) return true;
+    return section == "initial";
   }
 
   const toml::node* at(const std::string& key) const {
@@ -335,6 +636,45 @@ class Loader {
   }
 
   void check_rules(const CaseSpec& c) {
+    const std::size_t before = issues_.size();
+    if (c.model == "jeffcott") {
+      jeffcott_rules(c);
+    } else {
+      rigid_rotor_rules(c);
+    }
+    load_rules(c);
+    const bool model_valid = issues_.size() == before;
+    common_rules(c);
+    // The initial state must not penetrate the stator (d_N >= 0 at every contact), checked on
+    // the model itself once its parameters are valid. A state on the constraint written by a
+    // run (17 significant digits) gives d_N within round-off of 0, of either sign: touching.
+    // 64 ulps of g0 is about 3e-18 m for the reference case, six orders below the solver's
+    // position tolerance.
+    if (model_valid) {
+      const auto model = build_model(c);
+      const auto pen =
+          model->initial_penetration(c.initial.q0, 64.0 * std::numeric_limits<double>::epsilon());
+      if (pen) {
+        const auto coords = initial_coordinates(c);
+        const PlaneCoordinates pc = plane_coordinates(coords, pen->contact);
+        std::string key, names, values;
+        for (int i : {pc.rotor_x, pc.rotor_y, pc.stator_x, pc.stator_y}) {
+          if (i < 0) continue;
+          const std::string k = "initial." + coords[static_cast<std::size_t>(i)].name;
+          if (key.empty() && given(k)) key = k;
+          names += (names.empty() ? "" : ", ") + coords[static_cast<std::size_t>(i)].name;
+          values += (values.empty() ? "" : ", ") + fmt::format("{:.6g}", c.initial.q0[i]);
+        }
+        if (key.empty()) key = "initial." + coords[static_cast<std::size_t>(pc.rotor_x)].name;
+        issue(key, at(key), fmt::format("({}) = ({})", names, values),
+              fmt::format("the initial state penetrates the stator: d_N = g0 - |r - s| = {:.6g} m "
+                          "< 0",
+                          pen->d_N));
+      }
+    }
+  }
+
+  void rigid_rotor_rules(const CaseSpec& c) {
     const auto& r = c.params.rotor;
     rule(r.mass > 0, "rotor.mass", r.mass, "must be > 0 (a mass)");
     rule(r.Jd > 0, "rotor.Jd", r.Jd, "must be > 0 (a moment of inertia)");
@@ -359,12 +699,53 @@ class Loader {
     rule(s.k > 0, "stator.k", s.k, "must be > 0 (a stiffness)");
     rule(s.c >= 0, "stator.c", s.c, "must be >= 0 (a damping)");
     rule(s.gap > 0, "stator.gap", s.gap, "must be > 0 (the radial clearance g0)");
-    const auto& k = c.params.contact;
+    // M(q) is positive definite only if the spin's inertia exceeds the unbalance's share
+    // (docs/models.md, 2.3): Jp > u_b^2 / m
+    const double ub = c.params.loads.unbalance;
+    if (r.mass > 0 && ub > 0)
+      rule(r.Jp > ub * ub / r.mass, "rotor.Jp", r.Jp,
+           fmt::format("must be > loads.unbalance^2 / rotor.mass = {:.6g} kg m^2 (the polar "
+                       "inertia includes the unbalance's m eps^2)",
+                       ub * ub / r.mass));
+  }
+
+  void jeffcott_rules(const CaseSpec& c) {
+    const auto& r = c.jeffcott.rotor;
+    rule(r.mass > 0, "rotor.mass", r.mass, "must be > 0 (a mass)");
+    rule(r.k > 0, "rotor.k", r.k, "must be > 0 (a stiffness)");
+    rule(r.c >= 0, "rotor.c", r.c, "must be >= 0 (a damping)");
+    rule(r.radius > 0, "rotor.radius", r.radius, "must be > 0 (a length)");
+    rule(r.Jp > 0, "rotor.Jp", r.Jp, "must be > 0 (a moment of inertia)");
+    const double ub = c.jeffcott.loads.unbalance;
+    if (r.mass > 0 && ub > 0 && r.Jp > 0)
+      rule(r.Jp > ub * ub / r.mass, "rotor.Jp", r.Jp,
+           fmt::format("must be > loads.unbalance^2 / rotor.mass = {:.6g} kg m^2 (the polar "
+                       "inertia about the geometric centre includes the unbalance's m eps^2)",
+                       ub * ub / r.mass));
+    const auto& s = c.jeffcott.stator;
+    if (!s.rigid) {
+      rule(s.mass > 0, "stator.mass", s.mass, "must be > 0 (a mass)");
+      rule(s.k > 0, "stator.k", s.k, "must be > 0 (a stiffness)");
+      rule(s.c >= 0, "stator.c", s.c, "must be >= 0 (a damping)");
+    }
+    rule(s.gap > 0, "stator.gap", s.gap, "must be > 0 (the radial clearance g0)");
+  }
+
+  void load_rules(const CaseSpec& c) {
+    const LoadParams& L = c.loads();
+    rule(L.gravity >= 0, "loads.gravity", L.gravity, "must be >= 0 (its direction is fixed: -Y)");
+    if (L.spin == SpinDrive::Torque && L.torque_law == TorqueLaw::Linear)
+      rule(L.torque_free_speed > 0, "loads.torque_free_speed", L.torque_free_speed,
+           "must be > 0 (the speed at which the linear torque law gives no torque) [rad/s]");
+    rule(L.unbalance >= 0, "loads.unbalance", L.unbalance,
+         "must be >= 0 (m eps [kg m]; its direction is loads.unbalance_phase)");
+  }
+
+  void common_rules(const CaseSpec& c) {
+    const auto& k = c.contact();
     rule(k.mu >= 0, "contact.mu", k.mu, "must be >= 0 (a friction coefficient)");
     rule(k.e_n >= 0 && k.e_n <= 1, "contact.e_n", k.e_n, "must lie in [0, 1] (a restitution)");
     rule(k.e_t >= 0 && k.e_t <= 1, "contact.e_t", k.e_t, "must lie in [0, 1] (a restitution)");
-    rule(c.params.loads.gravity >= 0, "loads.gravity", c.params.loads.gravity,
-         "must be >= 0 (its direction is fixed: -Y)");
     rule(c.run.t_start >= 0, "run.t_start", c.run.t_start, "must be >= 0");
     rule(c.run.t_end > 0, "run.t_end", c.run.t_end, "must be > 0");
     if (c.run.t_end > 0 && c.run.t_start >= 0) {
@@ -462,35 +843,13 @@ class Loader {
                           rows, rows * 420e-9, static_cast<double>(kMaxOutputRows)));
       }
     }
-    // The initial state must not penetrate the stator: d_N = g0 - |(x_r - x_s, y_r - y_s)| >= 0.
-    if (s.gap > 0) {
-      const Vec& q = c.initial.q0;
-      const double dN = s.gap - std::hypot(q[XR] - q[XS], q[YR] - q[YS]);
-      // A state on the constraint written by a run (17 significant digits) gives d_N within
-      // round-off of 0, of either sign: touching. 64 ulps of g0 is about 3e-18 m for the
-      // reference case, six orders below the solver's position tolerance.
-      const double roundoff = 64.0 * std::numeric_limits<double>::epsilon() * s.gap;
-      if (dN < -roundoff) {
-        std::string key = "initial.x_r";
-        for (const char* kk : {"initial.x_r", "initial.y_r", "initial.x_s", "initial.y_s"})
-          if (given(kk)) {
-            key = kk;
-            break;
-          }
-        issue(key, at(key),
-              fmt::format("(x_r, y_r, x_s, y_s) = ({:.6g}, {:.6g}, {:.6g}, {:.6g})", q[XR], q[YR],
-                          q[XS], q[YS]),
-              fmt::format("the initial state penetrates the stator: d_N = g0 - |r - s| = {:.6g} m "
-                          "< 0",
-                          dN));
-      }
-    }
   }
 
   std::string source_;
   std::vector<CaseIssue> issues_;
   std::set<std::string> overridden_;
   std::map<std::string, const toml::node*> present_;
+  bool model_known_ = true;  // [model] kind names a model of the registry
 };
 
 }  // namespace
@@ -532,7 +891,8 @@ std::string to_toml(const CaseSpec& c) {
                                 toml_quote(c.name));
   CaseSpec copy = c;  // schema accessors take a mutable CaseSpec
   std::string section;
-  for (const auto& ks : schema()) {
+  for (const auto& ks : schema(c)) {
+    if (ks.refused && !ks.refused(c).empty()) continue;  // not a key of this case
     if (section != ks.section) {
       section = ks.section;
       out += fmt::format("\n[{}]\n", section);
@@ -548,9 +908,20 @@ std::string to_toml(const CaseSpec& c) {
       }
       case Kind::Integer: out += fmt::format("{} = {}\n", ks.key, *ks.integer(copy)); break;
       case Kind::String: out += fmt::format("{} = {}\n", ks.key, toml_quote(*ks.text(copy))); break;
+      case Kind::Bool:
+        out += fmt::format("{} = {}\n", ks.key, *ks.flag(copy) ? "true" : "false");
+        break;
+      case Kind::Choice: out += fmt::format("{} = {}\n", ks.key, toml_quote(ks.get(c))); break;
     }
   }
   return out;
+}
+
+std::vector<std::string> case_keys(const CaseSpec& c) {
+  std::vector<std::string> keys;
+  for (const auto& k : schema(c))
+    if (!k.refused || k.refused(c).empty()) keys.push_back(k.full());
+  return keys;
 }
 
 std::string output_folder(const CaseSpec& c) {

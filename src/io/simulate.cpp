@@ -10,10 +10,7 @@ namespace rubdyn {
 RunSummary simulate(const CaseSpec& spec, OutputSink& sink, const ProgressFn& progress,
                     const std::atomic<bool>* stop) {
   const std::unique_ptr<LagrangianModel> model = build_model(spec);
-  MechanicalState s0;
-  s0.q = spec.initial.q0;
-  s0.v = spec.initial.v0;
-  s0.t = spec.run.t_start;
+  const MechanicalState s0 = initial_state(spec);
   const SolverEntry* solver = find_solver(spec.solver.kind);
   if (!solver) throw std::runtime_error("unknown solver kind " + spec.solver.kind);
   return solver->run(spec, *model, s0, sink, progress, stop);

@@ -60,6 +60,8 @@ RotorStatorModel::RotorStatorModel(const RotorStatorParams& p)
   fext_[YB] = -(1.0 - nu_) * mg;
   fext_[YR] = -nu_ * mg;
   fext_[TH] = p.loads.torque;
+  ub_ = p.loads.unbalance;
+  phi_u_ = p.loads.unbalance_phase;
   M0f_ = M0_;
   Gf_ = G_;
   Df_ = D_;
@@ -73,6 +75,30 @@ void RotorStatorModel::solve_mass(VecIn q, MatOut B) const {
   // the pairs (x_b, x_r) and (y_b, y_r).
   const double a11 = M22_ / detA_, a12 = -M12_ / detA_, a22 = M11_ / detA_;
   const double Hx = 0.5 * H_ * (q[XR] - q[XB]), Hy = -0.5 * H_ * (q[YR] - q[YB]);
+  if (ub_ != 0.0) {
+    // with an unbalance the theta column is b = (H_y - (1-nu) u_b sin psi, H_x + (1-nu) u_b cos
+    // psi, -H_y - nu u_b sin psi, -H_x + nu u_b cos psi): u = A^-1 b in general form
+    const double psi = q[TH] + phi_u_, us = ub_ * std::sin(psi), uc = ub_ * std::cos(psi);
+    const double bxb = Hy - (1.0 - nu_) * us, byb = Hx + (1.0 - nu_) * uc;
+    const double bxr = -Hy - nu_ * us, byr = -Hx + nu_ * uc;
+    const double u_xb = a11 * bxb + a12 * bxr, u_xr = a12 * bxb + a22 * bxr;
+    const double u_yb = a11 * byb + a12 * byr, u_yr = a12 * byb + a22 * byr;
+    const double schur = p_.rotor.Jp - (bxb * u_xb + bxr * u_xr + byb * u_yb + byr * u_yr);
+    for (Eigen::Index j = 0; j < B.cols(); ++j) {
+      auto r = B.col(j);
+      const double zxb = a11 * r[XB] + a12 * r[XR], zxr = a12 * r[XB] + a22 * r[XR];
+      const double zyb = a11 * r[YB] + a12 * r[YR], zyr = a12 * r[YB] + a22 * r[YR];
+      const double th = (r[TH] - (bxb * zxb + bxr * zxr + byb * zyb + byr * zyr)) / schur;
+      r[XB] = zxb - u_xb * th;
+      r[XR] = zxr - u_xr * th;
+      r[YB] = zyb - u_yb * th;
+      r[YR] = zyr - u_yr * th;
+      r[TH] = th;
+      r[XS] *= Minv_s_;
+      r[YS] *= Minv_s_;
+    }
+    return;
+  }
   // u = A^-1 b with b = (H_y, H_x, -H_y, -H_x) on (x_b, y_b, x_r, y_r)
   const double ub = a11 - a12, ur = a12 - a22;  // A^-1 (1, -1) on a pair
   const double u_xb = Hy * ub, u_xr = Hy * ur, u_yb = Hx * ub, u_yr = Hx * ur;
@@ -173,6 +199,14 @@ void RotorStatorModel::mass_matrix(VecIn q, MatOut M) const {
   M(YB, TH) = M(TH, YB) = Hx;
   M(XR, TH) = M(TH, XR) = -Hy;
   M(YR, TH) = M(TH, YR) = -Hx;
+  if (ub_ != 0.0) {
+    // the unbalance in the plane of G (docs/models.md, 2.3)
+    const double psi = q[TH] + phi_u_, us = ub_ * std::sin(psi), uc = ub_ * std::cos(psi);
+    M(XB, TH) = M(TH, XB) = Hy - (1.0 - nu_) * us;
+    M(YB, TH) = M(TH, YB) = Hx + (1.0 - nu_) * uc;
+    M(XR, TH) = M(TH, XR) = -Hy - nu_ * us;
+    M(YR, TH) = M(TH, YR) = -Hx + nu_ * uc;
+  }
 }
 
 void RotorStatorModel::mass_product(VecIn q, VecIn x, VecOut y) const {
@@ -186,9 +220,19 @@ void RotorStatorModel::mass_product(VecIn q, VecIn x, VecOut y) const {
   y[TH] = Hy * x[XB] + Hx * x[YB] + -Hy * x[XR] + -Hx * x[YR] + p_.rotor.Jp * x[TH];
   y[XS] = p_.stator.mass * x[XS];
   y[YS] = p_.stator.mass * x[YS];
+  if (ub_ != 0.0) {
+    const double psi = q[TH] + phi_u_, us = ub_ * std::sin(psi), uc = ub_ * std::cos(psi);
+    const double bxb = -(1.0 - nu_) * us, byb = (1.0 - nu_) * uc, bxr = -nu_ * us,
+                 byr = nu_ * uc;  // the unbalance's share of the theta column
+    y[XB] += bxb * x[TH];
+    y[YB] += byb * x[TH];
+    y[XR] += bxr * x[TH];
+    y[YR] += byr * x[TH];
+    y[TH] += bxb * x[XB] + byb * x[YB] + bxr * x[XR] + byr * x[YR];
+  }
 }
 
-void RotorStatorModel::mass_matrix_product_jacobian(VecIn /*q*/, VecIn a, MatOut J) const {
+void RotorStatorModel::mass_matrix_product_jacobian(VecIn q, VecIn a, MatOut J) const {
   // (M a) depends on q only through H_x = H (x_r - x_b)/2 and H_y = -H (y_r - y_b)/2.
   const double h = 0.5 * H_;
   J.setZero();
@@ -205,6 +249,15 @@ void RotorStatorModel::mass_matrix_product_jacobian(VecIn /*q*/, VecIn a, MatOut
   J(TH, YR) = -h * (a[XB] - a[XR]);
   J(TH, XR) = h * (a[YB] - a[YR]);
   J(TH, XB) = -h * (a[YB] - a[YR]);
+  if (ub_ != 0.0) {
+    // d/dtheta of the unbalance's theta column b(psi) times a_theta, and of b . a_lateral
+    const double psi = q[TH] + phi_u_, us = ub_ * std::sin(psi), uc = ub_ * std::cos(psi);
+    J(XB, TH) += -(1.0 - nu_) * uc * a[TH];
+    J(YB, TH) += -(1.0 - nu_) * us * a[TH];
+    J(XR, TH) += -nu_ * uc * a[TH];
+    J(YR, TH) += -nu_ * us * a[TH];
+    J(TH, TH) += -((1.0 - nu_) * (uc * a[XB] + us * a[YB]) + nu_ * (uc * a[XR] + us * a[YR]));
+  }
 }
 
 void RotorStatorModel::smooth_forces(double /*t*/, VecIn q, VecIn v, VecOut f) const {
@@ -215,13 +268,43 @@ void RotorStatorModel::smooth_forces(double /*t*/, VecIn q, VecIn v, VecOut f) c
   f[YB] = fext_[YB] - Hw * (v[XR] - v[XB]) - cb * v[YB] - kb * q[YB];
   f[XR] = -Hw * (v[YR] - v[YB]);
   f[YR] = fext_[YR] - Hw * (v[XB] - v[XR]);
-  f[TH] = fext_[TH];
+  f[TH] = p_.loads.drive_torque(v[TH]);  // (fext_[TH] for the constant law)
   f[XS] = -cs * v[XS] - ks * q[XS];
   f[YS] = -cs * v[YS] - ks * q[YS];
+  if (ub_ != 0.0) {
+    // the centrifugal force u_b Omega^2 e^{i psi}, split (1 - nu) to B and nu to R, and
+    // gravity's torque (docs/models.md, 2.3)
+    const double psi = q[TH] + phi_u_, c = std::cos(psi), s = std::sin(psi);
+    const double cf = ub_ * v[TH] * v[TH];
+    f[XB] += (1.0 - nu_) * cf * c;
+    f[YB] += (1.0 - nu_) * cf * s;
+    f[XR] += nu_ * cf * c;
+    f[YR] += nu_ * cf * s;
+    f[TH] -= ub_ * p_.loads.gravity * c;
+  }
 }
 
-void RotorStatorModel::smooth_force_jacobians(double /*t*/, VecIn /*q*/, VecIn v, MatOut dfdq,
+void RotorStatorModel::smooth_force_jacobians(double /*t*/, VecIn q, VecIn v, MatOut dfdq,
                                               MatOut dfdv) const {
+  if (ub_ != 0.0 || p_.loads.torque_law != TorqueLaw::Constant) {
+    dfdq = -K_;
+    dfdv = -v[TH] * G_ - D_;
+    dfdv.col(TH).noalias() = -(G_ * v);
+    dfdv(TH, TH) += p_.loads.drive_torque_slope();
+    if (ub_ != 0.0) {
+      const double psi = q[TH] + phi_u_, c = std::cos(psi), s = std::sin(psi), om = v[TH];
+      const double cf = ub_ * om * om, w[4] = {1.0 - nu_, 1.0 - nu_, nu_, nu_};
+      const int xs[2] = {XB, XR}, ys[2] = {YB, YR};
+      for (int k = 0; k < 2; ++k) {
+        dfdq(xs[k], TH) += -w[2 * k] * cf * s;
+        dfdq(ys[k], TH) += w[2 * k] * cf * c;
+        dfdv(xs[k], TH) += 2.0 * w[2 * k] * ub_ * om * c;
+        dfdv(ys[k], TH) += 2.0 * w[2 * k] * ub_ * om * s;
+      }
+      dfdq(TH, TH) += ub_ * p_.loads.gravity * s;
+    }
+    return;
+  }
   if (dfdq.outerStride() == kDofs && dfdv.outerStride() == kDofs) {
     // contiguous: the fixed-size matrices (unrolled; the steppers' fast path)
     using M7 = Eigen::Matrix<double, kDofs, kDofs>;
@@ -287,14 +370,21 @@ double RotorStatorModel::kinetic_energy(VecIn q, VecIn v) const {
   const double spin =
       p_.rotor.Jp * v[TH] * v[TH] + 2.0 * v[TH] * (Hy * (v[XB] - v[XR]) + Hx * (v[YB] - v[YR]));
   const double stator = p_.stator.mass * (v[XS] * v[XS] + v[YS] * v[YS]);
-  return 0.5 * (rot + spin + stator);
+  double unb = 0.0;
+  if (ub_ != 0.0) {
+    const double psi = q[TH] + phi_u_, c = std::cos(psi), s = std::sin(psi);
+    unb =
+        2.0 * ub_ * v[TH] * ((1.0 - nu_) * (v[YB] * c - v[XB] * s) + nu_ * (v[YR] * c - v[XR] * s));
+  }
+  return 0.5 * (rot + spin + stator + unb);
 }
 
 double RotorStatorModel::potential_energy(VecIn q) const {
   const double mg = p_.rotor.mass * p_.loads.gravity;
   return 0.5 * p_.bearing.k * (q[XB] * q[XB] + q[YB] * q[YB]) +
          mg * (nu_ * q[YR] + (1.0 - nu_) * q[YB]) +
-         0.5 * p_.stator.k * (q[XS] * q[XS] + q[YS] * q[YS]);
+         0.5 * p_.stator.k * (q[XS] * q[XS] + q[YS] * q[YS]) +
+         (ub_ != 0.0 ? p_.loads.gravity * ub_ * std::sin(q[TH] + phi_u_) : 0.0);
 }
 
 double RotorStatorModel::bearing_damping_power(VecIn v) const {

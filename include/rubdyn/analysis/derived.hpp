@@ -30,6 +30,7 @@
 #include <string_view>
 
 #include "rubdyn/core/types.hpp"
+#include "rubdyn/model/jeffcott_model.hpp"
 #include "rubdyn/model/rotor_stator_params.hpp"
 
 namespace rubdyn {
@@ -62,5 +63,43 @@ struct DerivedQuantities {
 /// omega0: initial spin speed [rad/s]; omega_lim: the speed limit of the analysis [rad/s].
 DerivedQuantities compute_derived_quantities(const RotorStatorParams& p, double omega0,
                                              double omega_lim);
+
+/// Derived quantities of a Jeffcott-Black case (docs/models.md, section 1; docs/closed-forms.md).
+///
+/// Natural frequencies without contact [Hz]: the rotor f_r = sqrt(k_r / m_r) / 2 pi, the stator
+/// f_s = sqrt(k_s / m_s) / 2 pi, and the pinned pair (the stator tied to the rotor)
+/// f_c = sqrt((k_r + k_s) / (m_r + m_s)) / 2 pi, with damping ratios c / (2 sqrt(k m)). The
+/// planar Jeffcott rotor has no gyroscopic effect: forward and backward whirl share them.
+///
+/// Statics under gravity: without contact y_r = -m_r g / k_r, y_s = -m_s g / k_s (0 for a rigid
+/// stator). The relative sag delta = y_r - y_s closes the clearance when |delta| > g0: then the
+/// rotor rests on the bottom (delta < -g0) or the top (delta > g0) of the ring with
+///   F_N = (|delta| - g0) / (1/k_r + 1/k_s)      (1/k_s = 0 for a rigid stator),
+/// and y_r = (-m_r g +- F_N) / k_r, y_s = (-m_s g -+ F_N) / k_s.
+///
+/// Unbalance: eps = u_b / m_r, the inertia about the mass centre J_G = J - u_b^2 / m_r, and the
+/// steady forward whirl of the free rotor at omega0 (no contact, a stator that does not touch):
+/// |z_r| = u_b omega0^2 / |k_r - m_r omega0^2 + i c_r omega0| (it touches if > g0 + the stator's
+/// own motion, which is zero without contact).
+///
+/// Rigid stator, rolling under a constant torque (docs/closed-forms.md, 2.2): the steady spin
+/// Omega_ss = tau / (c_r R^2), its whirl -(R / g0) Omega_ss, the contact force
+/// g0 (m_r w^2 - k_r) and the time constant (J + m_r R^2) / (c_r R^2) of the approach.
+struct JeffcottQuantities {
+  double f_rotor = 0, zeta_rotor = 0;
+  double f_stator = 0, zeta_stator = 0;  ///< NaN for a rigid stator
+  double f_tied = 0;                     ///< NaN for a rigid stator (the rotor is pinned)
+  double sag_rotor = 0, sag_stator = 0;  ///< free statics y_r, y_s [m]
+  bool rests_on_stator = false;
+  double F_N = 0, y_r = 0, y_s = 0;  ///< statics with the contact closed
+  double eps = 0, J_G = 0;           ///< unbalance eccentricity [m], inertia about G
+  double unbalance_orbit = 0;        ///< free steady whirl radius at omega0 [m]
+  bool rolling_closed_form = false;  ///< rigid stator, constant torque, c_r > 0
+  double rolling_omega = 0, rolling_whirl = 0, rolling_F_N = 0, rolling_time_constant = 0;
+  FreeAcceleration free_acceleration = FreeAcceleration::reaches;
+  double t_free_to_omega_lim = 0;  ///< (omega_lim - omega0) J / tau (free rotor, constant law)
+};
+JeffcottQuantities compute_jeffcott_quantities(const JeffcottParams& p, double omega0,
+                                               double omega_lim);
 
 }  // namespace rubdyn

@@ -38,6 +38,11 @@ std::string to_toml(const CaseSpec& c);
 /// paths, never read as TOML escapes).
 std::string toml_quote(std::string_view text);
 
+/// Every key ("section.key") a case of c's model may hold with c's settings (stator.rigid,
+/// loads.spin, loads.torque_law), in the order of case.resolved.toml: the schema of
+/// io/case_toml.cpp, for documentation and its test.
+std::vector<std::string> case_keys(const CaseSpec& c);
+
 /// The output folder of a case: output.folder if set, else "out/<name>".
 std::string output_folder(const CaseSpec& c);
 

@@ -6,13 +6,16 @@
 #include <vector>
 
 #include "rubdyn/core/types.hpp"
+#include "rubdyn/model/jeffcott_model.hpp"
 #include "rubdyn/model/rotor_stator_model.hpp"
 #include "rubdyn/model/rotor_stator_params.hpp"
 
 namespace rubdyn {
 
 /// [initial]: every position and velocity of the model's coordinates (default 0), in the
-/// model's order; the keys are the coordinates' names and rate keys (x_b, ..., omega0, ...).
+/// model's order (io/model_registry.hpp: initial_coordinates); the keys are the coordinates'
+/// names and rate keys (x_b, ..., theta, ..., omega0, ...). A prescribed spin reads theta and
+/// omega0 as theta(t_start) and omega(t_start).
 struct InitialState {
   Vec q0 = Vec::Zero(RotorStatorModel::kDofs);
   Vec v0 = Vec::Zero(RotorStatorModel::kDofs);
@@ -58,11 +61,22 @@ struct OutputOptions {
 struct CaseSpec {
   std::string name;    ///< case name (file stem unless given)
   std::string source;  ///< path of the case file (for messages)
-  RotorStatorParams params;
+  /// [model] kind: a model of the registry (io/model_registry.hpp), "rigid-rotor" by default
+  std::string model = "rigid-rotor";
+  RotorStatorParams params;  ///< the parameters of kind "rigid-rotor"
+  JeffcottParams jeffcott;   ///< the parameters of kind "jeffcott"
   InitialState initial;
   RunOptions run;
   SolverOptions solver;
   OutputOptions output;
+
+  /// The contact law and the loads of the case's model ([contact], [loads]).
+  const ContactLaw& contact() const {
+    return model == "jeffcott" ? jeffcott.contact : params.contact;
+  }
+  ContactLaw& contact() { return model == "jeffcott" ? jeffcott.contact : params.contact; }
+  const LoadParams& loads() const { return model == "jeffcott" ? jeffcott.loads : params.loads; }
+  LoadParams& loads() { return model == "jeffcott" ? jeffcott.loads : params.loads; }
 };
 
 }  // namespace rubdyn

@@ -88,8 +88,8 @@ class RotorStatorModel final : public LagrangianModel {
   /// Power of the bearing dampers -c_b |v_b|^2 and of the stator dampers -c_s |v_s|^2 [W].
   double bearing_damping_power(VecIn v) const;
   double stator_damping_power(VecIn v) const;
-  /// Power of the driving torque tau_a theta' [W].
-  double torque_power(VecIn v) const { return p_.loads.torque * v[TH]; }
+  /// Power of the driving torque tau(theta') theta' [W].
+  double torque_power(VecIn v) const { return p_.loads.drive_torque(v[TH]) * v[TH]; }
 
   const RotorStatorParams& params() const { return p_; }
   double l() const { return l_; }      ///< L - delta [m]
@@ -131,6 +131,7 @@ class RotorStatorModel final : public LagrangianModel {
   Eigen::Matrix<double, kDofs, kDofs> M0f_, Gf_, Df_, Kf_;
   Vec fext_;
   double detA_ = 1, Minv_s_ = 1;  // det of the 2x2 rotor block, 1 / m_s
+  double ub_ = 0, phi_u_ = 0;     // the unbalance u_b [kg m] and its phase [rad]
 };
 
 }  // namespace rubdyn

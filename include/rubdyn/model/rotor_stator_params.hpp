@@ -2,6 +2,7 @@
 // Physical parameters of the rotor-stator model (paper, section 3), SI units. A plain struct;
 // validation of user input lives in io/ (case files), which names file, line, key and rule.
 #include "rubdyn/contact/contact_law.hpp"
+#include "rubdyn/model/loads.hpp"
 
 namespace rubdyn {
 
@@ -25,11 +26,6 @@ struct StatorParams {
   double k = 2.0e6;     ///< k_s [N/m]
   double c = 100.0;     ///< c_s [N s/m]
   double gap = 2.0e-4;  ///< g0 = R_s - R_r [m]
-};
-
-struct LoadParams {
-  double gravity = 9.81;  ///< g [m/s^2], along -Y
-  double torque = 20.0;   ///< driving torque tau_a [N m]
 };
 
 /// Defaults are the reference case (cases/reference.toml).
