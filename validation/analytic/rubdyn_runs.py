@@ -531,20 +531,26 @@ def study_black_rolling(rubdyn, out, branch, tol=TIGHT, t_end=0.8, exact=False, 
 
 
 # ---- (d) whip ------------------------------------------------------------------------------------
-def whip_params():
-    return dict(BLACK_WHIP, **{"loads.unbalance": 0.0})
+def whip_params(law="constant"):
+    P = dict(BLACK_WHIP, **{"loads.unbalance": 0.0})
+    if law == "linear":     # docs/closed-forms.md 4.4: Omega_0 = 50 rad/s
+        P.update({"loads.torque_law": "linear", "loads.torque_free_speed": 50.0})
+    return P
 
 
-def study_whip_exact(rubdyn, out, tol=TIGHT, Omega0=10.0, t_end=0.03):
+def study_whip_exact(rubdyn, out, tol=TIGHT, Omega0=10.0, t_end=0.03, law="constant"):
     """The stable (middle) whip root of BLACK_WHIP, started exactly on it at Omega0: the locked
-    frequency and N during the slip, Omega(t) linear, and the time at which it sticks (4.3)."""
-    P = whip_params()
+    frequency and N during the slip, Omega(t) linear (constant torque) or the exponential of the
+    linear law, and the time at which it sticks (4.3)."""
+    P = whip_params(law)
     root = cf.black_whip_roots(P)[1]
     ts = cf.whip_stick_time(P, root, Omega0)
-    st = Study("whip-exact", "Black's model, whip (middle root), started on the orbit")
+    lin = law == "linear"
+    st = Study("whip-exact" + ("-linear" if lin else ""),
+               "Black's model, whip (middle root), started on the orbit, %s torque" % law)
     keys = cf.contact_orbit_state(P, root["w"], Omega0)
     zs_frame = complex(keys["initial.x_s"], keys["initial.y_s"])
-    name = "whip_exact"
+    name = "whip_exact" + ("_linear" if lin else "")
     case = write_case(out, P, name)
     o = run(rubdyn, case, os.path.join(out, name), initial_sets(keys), t_end=t_end, **tol)
     st.run("on the orbit, Omega0 = %g rad/s" % Omega0, o)
@@ -564,10 +570,15 @@ def study_whip_exact(rubdyn, out, tol=TIGHT, Omega0=10.0, t_end=0.03):
     dev_N = rel(o.col["F_N"][sl], root["N"])
     st.add(Quantity("N during the slip, largest deviation", root["N"],
                     o.col["F_N"][sl][np.argmax(dev_N)], o.t[sl], dev_N, unit="N", reach=False))
-    Om_ex = Omega0 + ts["Omega_rate"] * o.t[sl]
+    if lin:
+        Om_ex = ts["Omega_inf"] + (Omega0 - ts["Omega_inf"]) * np.exp(-o.t[sl]
+                                                                      / ts["time_constant"])
+        lab = "Omega(t) - exponential (4.2), largest / Omega0"
+    else:
+        Om_ex = Omega0 + ts["Omega_rate"] * o.t[sl]
+        lab = "Omega(t) - (Omega0 + rate t) (4.2), largest / Omega0"
     dev_O = np.abs(o.col["omega"][sl] - Om_ex) / Omega0
-    st.add(Quantity("Omega(t) - (Omega0 + rate t) (4.2), largest / Omega0", 0.0,
-                    float(dev_O.max()), o.t[sl], dev_O, reach=False))
+    st.add(Quantity(lab, 0.0, float(dev_O.max()), o.t[sl], dev_O, reach=False))
     zeta = o.z_s() * np.exp(-1j * phi)
     dz = np.abs(zeta[sl] - zs_frame) / abs(zs_frame)
     st.add(Quantity("stator orbit z_s e^{-i phi} during the slip, largest", abs(zs_frame),
