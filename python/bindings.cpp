@@ -245,7 +245,8 @@ py::tuple analyze_columns(const Case& c, const py::dict& columns, long events, d
   r.spec = c.spec;
   r.events = events;
   const std::unique_ptr<LagrangianModel> model = build_model(c.spec);
-  r.samples.assign(n, Sample(model->num_dofs(), model->contact_count()));
+  r.samples.assign(n, Sample(model->num_dofs(), model->contact_count(),
+                             static_cast<int>(model->observables().size())));
   for (const SampleColumn& sc : timeseries_columns(*model)) {
     const auto a = col(sc.name.c_str());
     if (static_cast<std::size_t>(a.size()) != n)
@@ -257,6 +258,7 @@ py::tuple analyze_columns(const Case& c, const py::dict& columns, long events, d
         case SampleField::Time: s.t = x; break;
         case SampleField::Position: s.q[sc.index] = x; break;
         case SampleField::Velocity: s.v[sc.index] = x; break;
+        case SampleField::Observable: s.observables[sc.index] = x; break;
         default: {
           ContactSample& k = s.contacts[static_cast<std::size_t>(sc.index)];
           switch (sc.field) {
@@ -551,19 +553,19 @@ PYBIND11_MODULE(_core, m) {
           "(see contact_kinematics.hpp)")
       .def(
           "potential_energy",
-          [check_size](const ModelPtr& mdl, const Vec& q) {
+          [check_size](const ModelPtr& mdl, const Vec& q, double t) {
             check_size(mdl, q, "q");
-            return mdl->potential_energy(q);
+            return mdl->potential_energy(t, q);
           },
-          py::arg("q"))
+          py::arg("q"), py::arg("t") = 0.0)
       .def(
           "kinetic_energy",
-          [check_size](const ModelPtr& mdl, const Vec& q, const Vec& v) {
+          [check_size](const ModelPtr& mdl, const Vec& q, const Vec& v, double t) {
             check_size(mdl, q, "q");
             check_size(mdl, v, "v");
-            return mdl->kinetic_energy(q, v);
+            return mdl->kinetic_energy(t, q, v);
           },
-          py::arg("q"), py::arg("v"))
+          py::arg("q"), py::arg("v"), py::arg("t") = 0.0)
       .def(
           "linearize",
           [](const ModelPtr& mdl, const std::string& mode) -> py::object {

@@ -20,6 +20,7 @@
 #include "rubdyn/core/report.hpp"
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/columns.hpp"
 #include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/io/output_folder.hpp"
 #include "rubdyn/io/simulate.hpp"
@@ -76,12 +77,20 @@ std::vector<std::string> restart_overrides(const std::string& from,
                  from.c_str(), s->t);
   }
   std::vector<std::string> sets = {fmt::format("run.t_start={}", s->t)};
-  // every coordinate and its rate, under the model's initial-state keys
-  const auto coords = build_model(r.spec)->coordinates();
-  for (std::size_t i = 0; i < coords.size(); ++i) {
-    const auto k = static_cast<Eigen::Index>(i);
-    sets.push_back(fmt::format("initial.{}={}", coords[i].name, s->q[k]));
-    sets.push_back(fmt::format("initial.{}={}", coords[i].rate_key, s->v[k]));
+  // every initial-state key from the sample's column of the same name (a coordinate, its rate,
+  // or an observable: a prescribed spin's theta and omega)
+  const auto model = build_model(r.spec);
+  const auto cols = timeseries_columns(*model);
+  auto column = [&](const std::string& name) -> const SampleColumn* {
+    for (const auto& c : cols)
+      if (c.name == name) return &c;
+    return nullptr;
+  };
+  for (const auto& c : initial_coordinates(r.spec)) {
+    const SampleColumn* pos = column(c.name);
+    const SampleColumn* rate = column(c.rate);
+    if (pos) sets.push_back(fmt::format("initial.{}={}", c.name, sample_value(*s, *pos)));
+    if (rate) sets.push_back(fmt::format("initial.{}={}", c.rate_key, sample_value(*s, *rate)));
   }
   return sets;
 }

@@ -50,7 +50,7 @@ class Integrator {
         // changes nothing in the motion, since at a minimum of free flight d_N'' >= 0.
         sw_(m, SwitchTolerances{v_tol_, graze_tol_, std::max(graze_tol_, 1e-6 * g0_), g0_}),
         guard_(opt.max_events_per_second),
-        sample_(n_, 1),
+        sample_(n_, 1, static_cast<int>(m.observables().size())),
         op_(n_),
         dyn_(n_),
         kin_(n_),
@@ -59,7 +59,8 @@ class Integrator {
         q_tmp_(Vec::Zero(n_)),
         v_tmp_(Vec::Zero(n_)),
         q_ev_(Vec::Zero(n_)),
-        v_ev_(Vec::Zero(n_)) {
+        v_ev_(Vec::Zero(n_)),
+        acc_(Vec::Zero(n_)) {
     wit_.g0 = g0_;
     wit_.v_ref = std::max(1e3 * g0_, 1e-300);
     wit_.omega_lim = opt.omega_lim;
@@ -200,6 +201,17 @@ class Integrator {
     cs.v_N = kin_.v_N;
     cs.v_t = kin_.v_t;
     cs.phase = phase_;
+    if (s.observables.size() > 0) {
+      // the model's observables need the accelerations: the phase's, or M^-1 f in free flight
+      if (phase_ == Phase::Free) {
+        compute_contact_operators(m_, t, s.q, s.v, op_);
+        acc_ = op_.Minv_f();
+      } else {
+        acc_ = dyn_.a;
+      }
+      const ContactForce F{cs.F_N, cs.F_T};
+      m_.compute_observables(t, s.q, s.v, acc_, &F, s.observables);
+    }
     mon_.observe(t, m_.spin(t, s.q, s.v), cs.d_N, cs.v_N, cs.F_N, cs.F_T, phase_ != Phase::Free);
     sink_.sample(s);
   }
@@ -420,6 +432,7 @@ class Integrator {
   Vec q_restart_, v_restart_;         // where the current phase (re)started
   Vec q_tmp_, v_tmp_;                 // interpolated states (outputs, the localisers)
   Vec q_ev_, v_ev_;                   // the state at an event
+  Vec acc_;                           // the accelerations at a sample (the observables)
   double t_init_ = 0, next_out_ = 0;  // output grid t_init_ + k output_dt, next time to write
   long k_out_ = 1;
   Works work_{};
@@ -438,7 +451,7 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
       opt_.fixed_point ? "fixed-point" : "newton", opt_.output_dt);
   sum_.t_start = init.t;
   sum_.t_end_requested = t_end;
-  sum_.energy_initial = m_.kinetic_energy(init.q, init.v) + m_.potential_energy(init.q);
+  sum_.energy_initial = m_.mechanical_energy(init.t, init.q, init.v);
   double t = init.t;
   Vec q = init.q, v = init.v;
   t_init_ = init.t;
@@ -561,7 +574,7 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
   end_phase(t);
   sum_.t_reached = t;
   if (cur_) work_ = cur_->works();
-  sum_.energy_final = m_.kinetic_energy(q, v) + m_.potential_energy(q);
+  sum_.energy_final = m_.mechanical_energy(t, q, v);
   sum_.work_torque = work_[0];
   sum_.work_damping = work_[1];
   sum_.work_friction = work_[2];

@@ -42,7 +42,7 @@ Transition ModeSwitcher::gap_closed(double t, VecIn q, VecIn v_minus, EventRecor
   e.P_T = r.P_T;
   e.note = r.sticking ? "sticking impulse" : "sliding impulse";
   if (r.nonunique) e.note += "; several impulses solve the impact (tie rule applied)";
-  const double T_minus = m_.kinetic_energy(q, v_minus);
+  const double T_minus = m_.kinetic_energy(t, q, v_minus);
   ContactOperators opp(m_.num_dofs());
   compute_contact_operators(m_, t, q, v_plus, opp);
   if (law_.has_restitution() && opp.c.v_N > tol_.v_tol) {
@@ -65,7 +65,7 @@ Transition ModeSwitcher::gap_closed(double t, VecIn q, VecIn v_minus, EventRecor
       tr.log(e);
       tr.q = q;
       tr.v = v_plus;
-      tr.impulse_work = m_.kinetic_energy(q, v_plus) - T_minus;
+      tr.impulse_work = m_.kinetic_energy(t, q, v_plus) - T_minus;
       return tr;
     }
     const double t_inf = t + 2.0 * opp.c.v_N / (-bN * (1.0 - law_.e_n));
@@ -83,7 +83,7 @@ Transition ModeSwitcher::gap_closed(double t, VecIn q, VecIn v_minus, EventRecor
         height, t_inf, t_inf - t);
   }
   Transition tr = on_constraint(t, q, v_plus, e, 1e-9);
-  tr.impulse_work += m_.kinetic_energy(q, v_plus) - T_minus;
+  tr.impulse_work += m_.kinetic_energy(t, q, v_plus) - T_minus;
   return tr;
 }
 
@@ -95,10 +95,10 @@ Transition ModeSwitcher::on_constraint(double t, VecIn q_in, VecIn v_in, EventRe
   project_position(t, q, v);
   ContactOperators op(m_.num_dofs());
   compute_contact_operators(m_, t, q, v, op);
-  const double T_before = m_.kinetic_energy(q, v);
+  const double T_before = m_.kinetic_energy(t, q, v);
   const bool near_stick = law_.has_friction() && (at_slip_zero || std::abs(op.c.v_t) <= tol_.v_tol);
   project_velocity(op, near_stick ? 2 : 1, v);
-  tr.impulse_work = m_.kinetic_energy(q, v) - T_before;  // the (tiny) projection is an impulse
+  tr.impulse_work = m_.kinetic_energy(t, q, v) - T_before;  // the (tiny) projection is an impulse
   update_contact_velocity(m_, t, q, v, op);
   const ModeDecision d =
       select_mode(op, law_.mu, tol_.v_tol, rel_tol, ending, ending ? F_ref : 0.0);

@@ -29,6 +29,7 @@ using VMap = Eigen::Map<Vec>;
 PhaseSystem::PhaseSystem(const LagrangianModel& m, const WitnessSet& w)
     : m_(m),
       n_(m.num_dofs()),
+      rheonomic_(m.rheonomic()),
       law_(m.contact_law(0)),
       wit_(w),
       query_(m.num_dofs()),
@@ -150,9 +151,15 @@ double PhaseSystem::witness_value(Witness w, double t, const Vec& q, const Vec& 
   }
 }
 
-void PhaseSystem::powers(double t, VecIn q, VecIn v, double friction, double* w) const {
+void PhaseSystem::powers(double t, VecIn q, VecIn v, VecIn a, double F_N, double F_T,
+                         double friction, double* w) const {
   const SmoothPower p = m_.smooth_power(t, q, v);
-  w[0] = p.external;
+  if (rheonomic_) {
+    const ContactForce F{F_N, F_T};
+    w[0] = m_.applied_power(t, q, v, a, &F);
+  } else {
+    w[0] = p.external;
+  }
   w[1] = p.damping;
   w[2] = friction;
 }
@@ -213,7 +220,7 @@ int FreeFlight::rhs(double t, const double* y, double* yd, void* user) {
   qd = v;
   self->m_.smooth_forces(t, q, v, f);
   self->m_.solve_mass(q, a);
-  self->powers(t, q, v, 0.0, yd + 2 * n);
+  self->powers(t, q, v, a.col(0), 0.0, 0.0, 0.0, yd + 2 * n);
   return a.allFinite() ? 0 : 1;
 }
 
@@ -272,7 +279,7 @@ int ProjectedContact::rhs(double t, const double* y, double* yd, void* user) {
   if (!s.dyn.well_posed) return 1;  // recoverable: CVODE retries with a smaller step
   VMap(yd, n) = v;
   VMap(yd + n, n) = s.dyn.a;
-  self->powers(t, q, v, s.dyn.F_T * s.op.c.v_t, yd + 2 * n);
+  self->powers(t, q, v, s.dyn.a, s.dyn.F_N, s.dyn.F_T, s.dyn.F_T * s.op.c.v_t, yd + 2 * n);
   return s.dyn.a.allFinite() ? 0 : 1;
 }
 
@@ -332,7 +339,7 @@ int ReducedContact::rhs(double t, const double* y, double* yd, void* user) {
   VMap pdot(yd, d), pdd(yd + d, d);
   pdot = pd;
   self->chart_.reduce(self->mode_, self->anchor_, p, pd, s.q, s.dyn.a, pdd);
-  self->powers(t, s.q, s.v, s.dyn.F_T * s.op.c.v_t, yd + 2 * d);
+  self->powers(t, s.q, s.v, s.dyn.a, s.dyn.F_N, s.dyn.F_T, s.dyn.F_T * s.op.c.v_t, yd + 2 * d);
   return pdd.allFinite() ? 0 : 1;
 }
 

@@ -117,11 +117,14 @@ class PhaseSystem {
   /// Creates the session: `size` mechanical components, then the works.
   void open(int size, CvodeMethod method, const SessionSettings& s, const ChartScales& scales,
             const CvodeCallbacks& cb);
-  /// Rates of the works: applied loads, dampers, friction (friction power given).
-  void powers(double t, VecIn q, VecIn v, double friction, double* w) const;
+  /// Rates of the works: applied loads, dampers, friction (friction power given), with the
+  /// accelerations and contact forces a rheonomic drive's power needs.
+  void powers(double t, VecIn q, VecIn v, VecIn a, double F_N, double F_T, double friction,
+              double* w) const;
 
   const LagrangianModel& m_;
-  const int n_;  ///< the model's dofs
+  const int n_;           ///< the model's dofs
+  const bool rheonomic_;  ///< the drive's power needs the accelerations (m_.rheonomic())
   const ContactLaw law_;
   const WitnessSet& wit_;
   Phase phase_ = Phase::Free;

@@ -652,8 +652,8 @@ class Loader {
     // position tolerance.
     if (model_valid) {
       const auto model = build_model(c);
-      const auto pen =
-          model->initial_penetration(c.initial.q0, 64.0 * std::numeric_limits<double>::epsilon());
+      const auto pen = model->initial_penetration(initial_state(c).q,
+                                                  64.0 * std::numeric_limits<double>::epsilon());
       if (pen) {
         const auto coords = initial_coordinates(c);
         const PlaneCoordinates pc = plane_coordinates(coords, pen->contact);

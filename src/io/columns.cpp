@@ -6,7 +6,9 @@
 
 namespace rubdyn {
 
-std::vector<SampleColumn> timeseries_columns(const std::vector<Coordinate>& coords, int contacts) {
+std::vector<SampleColumn> timeseries_columns(const std::vector<Coordinate>& coords,
+                                             const std::vector<Observable>& observables,
+                                             int contacts) {
   std::vector<SampleColumn> cols;
   cols.push_back({"t", SampleField::Time, 0, "s"});
   const int n = static_cast<int>(coords.size());
@@ -18,6 +20,9 @@ std::vector<SampleColumn> timeseries_columns(const std::vector<Coordinate>& coor
     u.append("/s");
     cols.push_back({coords[static_cast<std::size_t>(i)].rate, SampleField::Velocity, i, u});
   }
+  for (std::size_t i = 0; i < observables.size(); ++i)
+    cols.push_back(
+        {observables[i].name, SampleField::Observable, static_cast<int>(i), observables[i].unit});
   for (int k = 0; k < contacts; ++k) {
     // (appended, not `"d_N" + sfx`: g++ 12 warns falsely about the latter, -Wrestrict)
     auto name = [&](const char* base) {
@@ -36,7 +41,7 @@ std::vector<SampleColumn> timeseries_columns(const std::vector<Coordinate>& coor
 }
 
 std::vector<SampleColumn> timeseries_columns(const LagrangianModel& m) {
-  return timeseries_columns(m.coordinates(), m.contact_count());
+  return timeseries_columns(m.coordinates(), m.observables(), m.contact_count());
 }
 
 double sample_value(const Sample& s, const SampleColumn& c) {
@@ -44,6 +49,7 @@ double sample_value(const Sample& s, const SampleColumn& c) {
     case SampleField::Time: return s.t;
     case SampleField::Position: return s.q[c.index];
     case SampleField::Velocity: return s.v[c.index];
+    case SampleField::Observable: return s.observables[c.index];
     default: break;
   }
   const ContactSample& k = s.contacts[static_cast<std::size_t>(c.index)];

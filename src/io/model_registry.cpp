@@ -1,9 +1,11 @@
 #include "rubdyn/io/model_registry.hpp"
 
+#include <limits>
 #include <stdexcept>
 #include <string>
 
 #include "rubdyn/model/jeffcott_model.hpp"
+#include "rubdyn/model/prescribed_spin.hpp"
 #include "rubdyn/model/rotor_stator_model.hpp"
 
 namespace rubdyn {
@@ -63,7 +65,17 @@ std::string model_names(std::string_view separator) {
 std::unique_ptr<LagrangianModel> build_model(const CaseSpec& spec) {
   const ModelEntry* e = find_model(spec.model);
   if (!e) throw std::invalid_argument("unknown model kind " + spec.model);
-  return e->build(spec);
+  if (spec.loads().spin != SpinDrive::Prescribed) return e->build(spec);
+  // a prescribed spin: the free-spin model without a drive torque, its spin coordinate made a
+  // given function of time from the initial theta and omega0 (model/prescribed_spin.hpp)
+  CaseSpec free = spec;
+  free.loads().spin = SpinDrive::Torque;
+  free.loads().torque = 0.0;
+  free.loads().torque_law = TorqueLaw::Constant;
+  std::unique_ptr<LagrangianModel> inner = e->build(free);
+  const int s = inner->spin_coordinate();
+  return std::make_unique<PrescribedSpin>(std::move(inner), spec.run.t_start, spec.initial.q0[s],
+                                          spec.initial.v0[s], spec.loads().spin_accel);
 }
 
 std::vector<Coordinate> initial_coordinates(const CaseSpec& spec) {
@@ -77,11 +89,26 @@ MechanicalState initial_state(const CaseSpec& spec) {
   s.t = spec.run.t_start;
   s.q = spec.initial.q0;
   s.v = spec.initial.v0;
+  if (spec.loads().spin == SpinDrive::Prescribed) {
+    // the spin is no coordinate of the model: its initial angle and speed start the prescription
+    const int sp = find_coordinate(initial_coordinates(spec), CoordinateRole::Spin);
+    const auto n = s.q.size() - 1;
+    Vec q(n), v(n);
+    for (Eigen::Index i = 0, j = 0; j <= n; ++j) {
+      if (j == sp) continue;
+      q[i] = s.q[j];
+      v[i++] = s.v[j];
+    }
+    s.q = q;
+    s.v = v;
+  }
   return s;
 }
 
 double nominal_torque(const CaseSpec& spec) {
-  return spec.loads().torque;
+  // a prescribed spin has no nominal torque (its drive torque is an output)
+  return spec.loads().spin == SpinDrive::Prescribed ? std::numeric_limits<double>::quiet_NaN()
+                                                    : spec.loads().torque;
 }
 
 }  // namespace rubdyn

@@ -60,6 +60,7 @@ OutputFolder::OutputFolder(const std::string& dir, const CaseSpec& spec, std::at
     event_columns_ = event_columns(model->contact_count());
     n_dofs_ = model->num_dofs();
     n_contacts_ = model->contact_count();
+    n_observables_ = static_cast<int>(model->observables().size());
   }
   namespace fs = std::filesystem;
   std::error_code ec;
@@ -132,7 +133,8 @@ void OutputFolder::sample(const Sample& s) {
   if (!ts_ || !error_.empty()) return;
   // a sample of another model's size is a bug of the caller, not bad input
   RUBDYN_DEMAND(s.q.size() == n_dofs_ && s.v.size() == n_dofs_ &&
-                static_cast<int>(s.contacts.size()) == n_contacts_);
+                static_cast<int>(s.contacts.size()) == n_contacts_ &&
+                s.observables.size() == n_observables_);
   // Shortest representation that reads back to the same double ({} in fmt: Dragonbox), exact
   // like %.17g but about 3x cheaper, which matters: at 0.1 ms output the rows cost as much as
   // the event-driven integration of the reference case.

@@ -99,7 +99,7 @@ RunRecord read_run(const std::string& dir) {
   for (std::size_t k = 0; k < ts.rows.size(); ++k) {
     const auto& v = ts.rows[k];
     const long ln = ts.line_of[k];
-    Sample s(n, model->contact_count());
+    Sample s(n, model->contact_count(), static_cast<int>(model->observables().size()));
     for (std::size_t c = 0; c < cols.size(); ++c) {
       const SampleColumn& col = cols[c];
       const std::string& field = v[static_cast<std::size_t>(at[c])];
@@ -112,13 +112,15 @@ RunRecord read_run(const std::string& dir) {
         throw std::runtime_error(
             fmt::format("{}:{}: column {}: '{}' is not a number", ts_path, ln, col.name, field));
       ContactSample* cs = col.field == SampleField::Time || col.field == SampleField::Position ||
-                                  col.field == SampleField::Velocity
+                                  col.field == SampleField::Velocity ||
+                                  col.field == SampleField::Observable
                               ? nullptr
                               : &s.contacts[static_cast<std::size_t>(col.index)];
       switch (col.field) {
         case SampleField::Time: s.t = x; break;
         case SampleField::Position: s.q[col.index] = x; break;
         case SampleField::Velocity: s.v[col.index] = x; break;
+        case SampleField::Observable: s.observables[col.index] = x; break;
         case SampleField::Gap: cs->d_N = x; break;
         case SampleField::GapRate: cs->v_N = x; break;
         case SampleField::SlipSpeed: cs->v_t = x; break;

@@ -177,7 +177,7 @@ void JeffcottModel::compute_contact(int /*k*/, double /*t*/, VecIn q, VecIn v,
   c.wdot_T = vt * c.v_N / rho;
 }
 
-double JeffcottModel::kinetic_energy(VecIn q, VecIn v) const {
+double JeffcottModel::kinetic_energy(double /*t*/, VecIn q, VecIn v) const {
   const auto& r = p_.rotor;
   double T = r.mass * (v[XR] * v[XR] + v[YR] * v[YR]) + r.Jp * v[TH] * v[TH];
   const double ub = p_.loads.unbalance;
@@ -189,7 +189,7 @@ double JeffcottModel::kinetic_energy(VecIn q, VecIn v) const {
   return 0.5 * T;
 }
 
-double JeffcottModel::potential_energy(VecIn q) const {
+double JeffcottModel::potential_energy(double /*t*/, VecIn q) const {
   const auto& r = p_.rotor;
   const auto& L = p_.loads;
   double V = 0.5 * r.k * (q[XR] * q[XR] + q[YR] * q[YR]) + L.gravity * r.mass * q[YR];

@@ -20,7 +20,12 @@ void LagrangianModel::mass_product(VecIn q, VecIn x, VecOut y) const {
   y.noalias() = M * x;
 }
 
-double LagrangianModel::kinetic_energy(VecIn q, VecIn v) const {
+const std::vector<Observable>& LagrangianModel::observables() const {
+  static const std::vector<Observable> none;
+  return none;
+}
+
+double LagrangianModel::kinetic_energy(double /*t*/, VecIn q, VecIn v) const {
   const int n = num_dofs();
   Mat M(n, n);
   mass_matrix(q, M);

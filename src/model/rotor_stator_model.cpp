@@ -360,7 +360,7 @@ void RotorStatorModel::compute_contact(int /*k*/, double /*t*/, VecIn q, VecIn v
   c.wdot_T = wt_ * c.v_N / rho;
 }
 
-double RotorStatorModel::kinetic_energy(VecIn q, VecIn v) const {
+double RotorStatorModel::kinetic_energy(double /*t*/, VecIn q, VecIn v) const {
   // 1/2 v^T M(q) v with the structure of M (header): the rotor's 2x2 blocks, the spin and its
   // coupling through H_x, H_y, the stator.
   const double Hx = 0.5 * H_ * (q[XR] - q[XB]), Hy = -0.5 * H_ * (q[YR] - q[YB]);
@@ -379,7 +379,7 @@ double RotorStatorModel::kinetic_energy(VecIn q, VecIn v) const {
   return 0.5 * (rot + spin + stator + unb);
 }
 
-double RotorStatorModel::potential_energy(VecIn q) const {
+double RotorStatorModel::potential_energy(double /*t*/, VecIn q) const {
   const double mg = p_.rotor.mass * p_.loads.gravity;
   return 0.5 * p_.bearing.k * (q[XB] * q[XB] + q[YB] * q[YB]) +
          mg * (nu_ * q[YR] + (1.0 - nu_) * q[YB]) +

@@ -273,6 +273,7 @@ StepOutcome Carpenter<N>::step(double t, StepReport& r, std::string& message) {
     m_.compute_contact(0, t, q_, v_, kin_);
     r.contact_work = (FN * kin_.v_N + FT * kin_.v_t) * h;
   }
+  r.a = (d - dq_prev_) / h2;
   if (spin_ >= 0) {
     acc_prev2_ = acc_prev_;
     acc_prev_ = (d[spin_] - dq_prev_[spin_]) / h2;

@@ -75,7 +75,7 @@ class RunLoop {
         sink_(sink),
         mon_(m.contact_law(0).mu, o.omega_lim),
         kin_(m.num_dofs()),
-        sample_(m.num_dofs(), 1) {}
+        sample_(m.num_dofs(), 1, static_cast<int>(m.observables().size())) {}
 
   RunSummary run(Stepper& stepper, const MechanicalState& init, double t_end);
 
@@ -152,6 +152,10 @@ void RunLoop::record(const StepReport& r, double t) {
     cs.F_N = r.F_N;
     cs.F_T = r.F_T;
     cs.phase = r.phase;
+    if (s.observables.size() > 0) {
+      const ContactForce F{r.F_N, r.F_T};
+      m_.compute_observables(t, r.q, r.v, r.a, &F, s.observables);
+    }
     sink_.sample(s);
     if (o_.progress)
       o_.progress(t, std::accumulate(sum_.events.begin(), sum_.events.end(), 0L), omega, r.phase);
@@ -167,7 +171,7 @@ RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_
   sum_.t_end_requested = t_end;
   sum_.t_reached = init.t;
   next_t_out_ = init.t;
-  sum_.energy_initial = m_.kinetic_energy(init.q, init.v) + m_.potential_energy(init.q);
+  sum_.energy_initial = m_.mechanical_energy(init.t, init.q, init.v);
   const long n_steps = std::max(1L, std::lround((t_end - init.t) / h));
   RUBDYN_DEMAND(h > 0.0 && n_steps <= kMaxFixedSteps);  // run_fixed_step checked the options
   stepper.start(init.t, init.q, init.v);
@@ -175,14 +179,29 @@ RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_
   // contact forces and impulses as each scheme defines them (StepReport::contact_work)
   double work_ext = 0.0, work_damp = 0.0, work_contact = 0.0;
   double t_prev = init.t;
-  SmoothPower p_prev = m_.smooth_power(init.t, init.q, init.v);
-  long unconverged = 0, nonunique = 0;
-  // two reports, used in turn: the last completed (finite) state stays in one of them while the
-  // stepper writes the next into the other (no copy per step)
   const int n = m_.num_dofs();
   StepReport reports[2] = {StepReport(n), StepReport(n)};
   reports[1].q = init.q;
   reports[1].v = init.v;
+  // the applied loads' power; a rheonomic drive's depends on the accelerations and contact
+  // forces: the scheme's (StepReport::a), and at the start the contact-free M^-1 f
+  const bool rheonomic = m_.rheonomic();
+  auto external = [&](double t, const StepReport& r) {
+    if (!rheonomic) return m_.smooth_power(t, r.q, r.v).external;
+    const ContactForce F{r.F_N, r.F_T};
+    return m_.applied_power(t, r.q, r.v, r.a, &F);
+  };
+  if (rheonomic) {
+    Mat f(n, 1);
+    m_.smooth_forces(init.t, init.q, init.v, f.col(0));
+    m_.solve_mass(init.q, f);
+    reports[1].a = f.col(0);
+  }
+  SmoothPower p_prev = m_.smooth_power(init.t, init.q, init.v);
+  p_prev.external = external(init.t, reports[1]);
+  long unconverged = 0, nonunique = 0;
+  // two reports, used in turn: the last completed (finite) state stays in one of them while the
+  // stepper writes the next into the other (no copy per step)
   const StepReport* last = &reports[1];
   std::string message;
   for (long i = 0; last->index < n_steps || i == 0; ++i) {
@@ -222,7 +241,8 @@ RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_
       sum_.message = fmt::format("non-finite state at t = {:.17g}", tr);
       break;
     }
-    const SmoothPower p = m_.smooth_power(tr, r.q, r.v);
+    SmoothPower p = m_.smooth_power(tr, r.q, r.v);
+    if (rheonomic) p.external = external(tr, r);
     work_ext += 0.5 * (tr - t_prev) * (p_prev.external + p.external);
     work_damp += 0.5 * (tr - t_prev) * (p_prev.damping + p.damping);
     work_contact += r.contact_work;
@@ -232,7 +252,7 @@ RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_
     sum_.t_reached = tr;
     record(r, tr);
   }
-  sum_.energy_final = m_.kinetic_energy(last->q, last->v) + m_.potential_energy(last->q);
+  sum_.energy_final = m_.mechanical_energy(sum_.t_reached, last->q, last->v);
   sum_.work_torque = work_ext;
   sum_.work_damping = work_damp;
   // contact work: friction and normal impulses together (the split is not defined for impulses

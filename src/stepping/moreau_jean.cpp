@@ -40,6 +40,7 @@ class MoreauJean final : public Stepper {
         law_(m.contact_law(0)),
         o_(o),
         project_(o.scheme == FixedStepScheme::MoreauJeanProjected),
+        rheonomic_(m.rheonomic()),
         newton_(n_, 50),
         q_(V::Zero(n_)),
         v_(V::Zero(n_)),
@@ -92,6 +93,7 @@ class MoreauJean final : public Stepper {
   const ContactLaw law_;
   const FixedStepOptions o_;
   const bool project_;
+  const bool rheonomic_;
   detail::SimplifiedNewton<N> newton_;
   V q_, v_;
   V v_prev_;                        // v_{i-1}, for the predictor
@@ -110,6 +112,15 @@ StepOutcome MoreauJean<N>::step(double t, StepReport& r, std::string& message) {
   m_.smooth_forces(t, q_, v_, fi_);
   m_.compute_contact(0, t, q_, v_, ci_);
   const ContactKinematics& ci = ci_;
+  // A prescribed motion's share of the contact speeds (b_N, b_T: zero for a scleronomic model)
+  // is taken at the step's end, t_{i+1}, where the velocity-level law holds, with W at q_i
+  // like the rest of the relation; the impulse's work uses the mean of its two ends.
+  double bN1 = ci.b_N, bT1 = ci.b_T;
+  if (rheonomic_) {
+    m_.compute_contact(0, t + h, q_, v_, kin_);
+    bN1 = kin_.b_N;
+    bT1 = kin_.b_T;
+  }
   const bool active = ci.normal_defined && ci.d_N + 0.5 * h * ci.v_N <= 0.0;
   // W_N, W_T at q_i in the stepper's vectors (fixed-size on the fast path)
   V& WN = WN_;
@@ -157,8 +168,8 @@ StepOutcome MoreauJean<N>::step(double t, StepReport& r, std::string& message) {
     if (active) {
       // the velocity-level Coulomb-Signorini problem, band: round-off on the velocities
       const LocalSolution sol = solve_coulomb_signorini(
-          make_local_problem(A_NN, A_NT, A_TT, WN.dot(vfree_) + ci.b_N + law_.e_n * ci.v_N,
-                             WT.dot(vfree_) + ci.b_T + law_.e_t * ci.v_t, law_.mu));
+          make_local_problem(A_NN, A_NT, A_TT, WN.dot(vfree_) + bN1 + law_.e_n * ci.v_N,
+                             WT.dot(vfree_) + bT1 + law_.e_t * ci.v_t, law_.mu));
       if (!sol.ok()) {
         message = fmt::format(
             "mj: the contact problem has no solution at t = {:.17g} "
@@ -208,8 +219,10 @@ StepOutcome MoreauJean<N>::step(double t, StepReport& r, std::string& message) {
   // work of the impulse with the mid-step velocity: r . W^T (v_i + v_{i+1}) / 2
   if (rN != 0.0 || rT != 0.0) {
     dv_ = 0.5 * (v_ + v);
-    r.contact_work = rN * WN.dot(dv_) + rT * WT.dot(dv_);
+    r.contact_work =
+        rN * (WN.dot(dv_) + 0.5 * (ci.b_N + bN1)) + rT * (WT.dot(dv_) + 0.5 * (ci.b_T + bT1));
   }
+  r.a = (v - v_) / h;
   v_prev_ = v_;
   q_ = q;
   v_ = v;

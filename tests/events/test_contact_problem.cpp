@@ -26,8 +26,8 @@ class CoupledBlock final : public rubdyn::testing::PlaneModel {
     LagrangianModel::mass_product(q, x, y);
   }
   void solve_mass(VecIn q, MatOut B) const override { LagrangianModel::solve_mass(q, B); }
-  double kinetic_energy(VecIn q, VecIn v) const override {
-    return LagrangianModel::kinetic_energy(q, v);
+  double kinetic_energy(double t, VecIn q, VecIn v) const override {
+    return LagrangianModel::kinetic_energy(t, q, v);
   }
   void smooth_forces(double, VecIn, VecIn, VecOut f) const override {
     f.setZero();
@@ -37,7 +37,7 @@ class CoupledBlock final : public rubdyn::testing::PlaneModel {
     a.setZero();
     b.setZero();
   }
-  double potential_energy(VecIn q) const override { return -P_ * q[1]; }
+  double potential_energy(double, VecIn q) const override { return -P_ * q[1]; }
   SmoothPower smooth_power(double, VecIn, VecIn) const override { return {}; }
 
  private:

@@ -210,7 +210,7 @@ class GrazingOscillator final : public rubdyn::testing::PlaneModel {
     dfdv.setZero();
     dfdq(1, 1) = -w * w;
   }
-  double potential_energy(VecIn q) const override {
+  double potential_energy(double, VecIn q) const override {
     return 0.5 * w * w * (q[1] - 1.0) * (q[1] - 1.0);
   }
   SmoothPower smooth_power(double, VecIn, VecIn) const override { return {}; }

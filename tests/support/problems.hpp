@@ -85,7 +85,9 @@ class PlaneModel : public LagrangianModel {
     c.b_N = c.b_T = c.wdot_N = c.wdot_T = 0.0;
     c.normal_defined = true;
   }
-  double kinetic_energy(VecIn, VecIn v) const override { return 0.5 * mass_ * v.squaredNorm(); }
+  double kinetic_energy(double, VecIn, VecIn v) const override {
+    return 0.5 * mass_ * v.squaredNorm();
+  }
   double gap_scale(int = 0) const override { return gap_scale_; }
   const ContactLaw& contact_law(int = 0) const override { return law_; }
   const ContactChart* contact_chart() const override { return &chart_; }
@@ -113,7 +115,7 @@ class SpringMass final : public PlaneModel {
     dfdv.setZero();
     dfdq(0, 0) = -w_ * w_;
   }
-  double potential_energy(VecIn q) const override { return 0.5 * w_ * w_ * q[0] * q[0]; }
+  double potential_energy(double, VecIn q) const override { return 0.5 * w_ * w_ * q[0] * q[0]; }
   SmoothPower smooth_power(double, VecIn, VecIn) const override { return {}; }
   MechanicalState initial(double x0 = 1.0, double v0 = 0.0) const {
     MechanicalState s = state();
@@ -150,7 +152,7 @@ class BouncingBall final : public PlaneModel {
     dfdq.setZero();
     dfdv.setZero();
   }
-  double potential_energy(VecIn q) const override { return mass_ * g_ * q[1]; }
+  double potential_energy(double, VecIn q) const override { return mass_ * g_ * q[1]; }
   SmoothPower smooth_power(double, VecIn, VecIn) const override { return {}; }
   MechanicalState initial() const {
     MechanicalState s = state();
@@ -206,7 +208,7 @@ class BlockOnBelt final : public PlaneModel {
     dfdq(0, 0) = -k_;
   }
   /// Gravity only: the spring to the moving wall is a non-conservative applied load here.
-  double potential_energy(VecIn q) const override { return mass_ * g_ * q[1]; }
+  double potential_energy(double, VecIn q) const override { return mass_ * g_ * q[1]; }
   SmoothPower smooth_power(double t, VecIn q, VecIn v) const override {
     return {-k_ * (q[0] + v_b_ * t) * v[0], 0.0};
   }
@@ -251,7 +253,7 @@ class FreeFall final : public PlaneModel {
     dfdq.setZero();
     dfdv.setZero();
   }
-  double potential_energy(VecIn q) const override { return 9.81 * q[1]; }
+  double potential_energy(double, VecIn q) const override { return 9.81 * q[1]; }
   SmoothPower smooth_power(double, VecIn, VecIn) const override { return {}; }
   int contact_count() const override { return contacts_; }
 

@@ -83,7 +83,7 @@ TEST_CASE("M(q) is symmetric positive definite - G is skew - gyroscopic forces d
     Eigen::SelfAdjointEigenSolver<Mat7> es(M);
     REQUIRE(es.eigenvalues().minCoeff() > 0.0);
     // T = 1/2 v^T M v equals eq. (8): both are sums of ~1e5 J terms; 1e-12 relative is round-off.
-    REQUIRE(model.kinetic_energy(q, v) == Approx(kinetic_eq8(p, q, v)).epsilon(1e-12));
+    REQUIRE(model.kinetic_energy(0.0, q, v) == Approx(kinetic_eq8(p, q, v)).epsilon(1e-12));
     const double gyro_power = v.dot(v[TH] * (model.G() * v));
     // exactly zero in exact arithmetic; round-off of terms of size H * |v|^3 ~ 1e2
     REQUIRE(std::abs(gyro_power) < 1e-12 * model.H() * v.squaredNorm() * std::abs(v[TH]));
@@ -308,7 +308,7 @@ TEST_CASE("Contact-free motion conserves energy - with torque and damping the ba
     p.loads.gravity = 0.0;
     const RotorStatorModel m(p);
     auto energy = [&m](const Rk4State& x) {
-      return m.kinetic_energy(x.q, x.v) + m.potential_energy(x.q);
+      return m.kinetic_energy(0.0, x.q, x.v) + m.potential_energy(0.0, x.q);
     };
     Rk4State s = s0;
     double spin_min = 1e300, spin_max = 0;
@@ -329,7 +329,7 @@ TEST_CASE("Contact-free motion conserves energy - with torque and damping the ba
     const RotorStatorParams p;  // torque, dampers and gravity
     const RotorStatorModel m(p);
     auto energy = [&m](const Rk4State& x) {
-      return m.kinetic_energy(x.q, x.v) + m.potential_energy(x.q);
+      return m.kinetic_energy(0.0, x.q, x.v) + m.potential_energy(0.0, x.q);
     };
     Rk4State s = s0;
     for (int i = 0; i < steps; ++i) s = rk4_step(m, s, h);

@@ -81,12 +81,16 @@ struct ContactSample {
 /// (q, v of the model's size) and each contact's quantities (one entry per contact).
 struct Sample {
   Sample() = default;
-  /// Sized for a model with n dofs and `contacts` contacts.
-  Sample(int n, int contacts)
-      : q(Vec::Zero(n)), v(Vec::Zero(n)), contacts(static_cast<std::size_t>(contacts)) {}
+  /// Sized for a model with n dofs, `contacts` contacts and `observables` observables.
+  Sample(int n, int contacts, int observables = 0)
+      : q(Vec::Zero(n)),
+        v(Vec::Zero(n)),
+        contacts(static_cast<std::size_t>(contacts)),
+        observables(Vec::Zero(observables)) {}
   double t = 0.0;
   Vec q, v;
   std::vector<ContactSample> contacts;
+  Vec observables;  ///< the model's observables (LagrangianModel::observables), in its order
 };
 
 /// One logged event.

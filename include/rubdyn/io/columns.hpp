@@ -4,7 +4,8 @@
 // bindings and the Python package all read these tables; none spells the columns out itself.
 //
 // timeseries.csv, for a model with coordinates q_1..q_n and K contacts:
-//   t, <q names>, <rate names>, then per contact d_N, v_N, v_t, F_N, F_T, phase
+//   t, <q names>, <rate names>, <the model's observables>, then per contact d_N, v_N, v_t, F_N,
+//   F_T, phase
 // (the coordinates' names from the model, e.g. x_b, ..., theta, ..., omega, ...; with K > 1 the
 // contact columns carry the contact's number: d_N_1, ..., phase_K).
 // events.csv: t, kind, phase_before, phase_after, d_N, v_N_minus, v_N_plus, v_t_minus,
@@ -16,16 +17,16 @@
 
 #include "rubdyn/core/run_types.hpp"
 #include "rubdyn/model/coordinates.hpp"
+#include "rubdyn/model/lagrangian_model.hpp"
 
 namespace rubdyn {
-
-class LagrangianModel;
 
 /// What a timeseries column holds.
 enum class SampleField {
   Time,
   Position,
   Velocity,
+  Observable,  ///< one of the model's observables (LagrangianModel::observables)
   Gap,
   GapRate,
   SlipSpeed,
@@ -37,12 +38,14 @@ enum class SampleField {
 struct SampleColumn {
   std::string name;
   SampleField field = SampleField::Time;
-  int index = 0;  ///< the coordinate (Position, Velocity) or the contact (the others)
+  int index = 0;  ///< the coordinate (Position, Velocity), observable, or contact (the others)
   std::string unit;
 };
 
-/// timeseries.csv's columns for a model with these coordinates and `contacts` contacts.
-std::vector<SampleColumn> timeseries_columns(const std::vector<Coordinate>& coords, int contacts);
+/// timeseries.csv's columns for a model with these coordinates, observables and contacts.
+std::vector<SampleColumn> timeseries_columns(const std::vector<Coordinate>& coords,
+                                             const std::vector<Observable>& observables,
+                                             int contacts);
 std::vector<SampleColumn> timeseries_columns(const LagrangianModel& m);
 
 /// A column's value in a sample, as a number (Phase: its code, the Phase enum value).

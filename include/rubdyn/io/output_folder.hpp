@@ -63,7 +63,7 @@ class OutputFolder final : public OutputSink {
   std::string dir_;
   std::vector<SampleColumn> columns_;       // timeseries.csv (io/columns.hpp)
   std::vector<EventColumn> event_columns_;  // events.csv
-  int n_dofs_ = 0, n_contacts_ = 0;
+  int n_dofs_ = 0, n_contacts_ = 0, n_observables_ = 0;
   std::string buf_;  // one row
   std::FILE* ts_ = nullptr;
   std::FILE* ev_ = nullptr;

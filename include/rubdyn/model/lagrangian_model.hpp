@@ -61,6 +61,18 @@ struct LinearModel {
   int size() const { return static_cast<int>(names.size()); }
 };
 
+/// The force of one contact (F_N along -n on the rotor, F_T along t): what a rheonomic drive's
+/// work and a model's observables may depend on.
+struct ContactForce {
+  double F_N = 0.0, F_T = 0.0;
+};
+
+/// A quantity a model computes at every output sample besides its coordinates (an output column
+/// of timeseries.csv): e.g. the spin angle, speed and holding torque of a prescribed spin.
+struct Observable {
+  std::string name, unit, meaning;
+};
+
 /// A contact that the initial state penetrates (initial_penetration).
 struct Penetration {
   int contact = 0;
@@ -120,12 +132,29 @@ class LagrangianModel {
   /// event-driven integrator then integrates contact phases as a DAE with projection).
   virtual const ContactChart* contact_chart() const { return nullptr; }
 
-  /// Kinetic energy 1/2 v^T M(q) v. The default forms M (allocates); models override it.
-  virtual double kinetic_energy(VecIn q, VecIn v) const;
-  /// Potential energy of the conservative forces included in f [J].
-  virtual double potential_energy(VecIn q) const = 0;
+  /// Kinetic energy 1/2 v^T M(q) v (of the whole system, a prescribed motion's included) at
+  /// time t. The default forms M (allocates); models override it.
+  virtual double kinetic_energy(double t, VecIn q, VecIn v) const;
+  /// Potential energy of the conservative forces included in f [J], at time t.
+  virtual double potential_energy(double t, VecIn q) const = 0;
   /// Power of the smooth non-conservative forces.
   virtual SmoothPower smooth_power(double t, VecIn q, VecIn v) const = 0;
+  /// Whether the applied loads' power depends on the accelerations and the contact forces (a
+  /// prescribed motion, held by whatever torque it takes): solvers then pass them to
+  /// applied_power. False: applied_power is smooth_power's external part.
+  virtual bool rheonomic() const { return false; }
+  /// Power of the applied loads [W] at (t, q, v) with the accelerations a and the contact
+  /// forces F (one per contact): the drive's power, in the energy balance.
+  virtual double applied_power(double t, VecIn q, VecIn v, VecIn /*a*/,
+                               const ContactForce* /*F*/) const {
+    return smooth_power(t, q, v).external;
+  }
+  /// What the model computes at each output sample besides its coordinates (default: none).
+  virtual const std::vector<Observable>& observables() const;
+  /// Their values at (t, q, v) with the accelerations a and contact forces F, into `out`
+  /// (size observables().size()).
+  virtual void compute_observables(double /*t*/, VecIn /*q*/, VecIn /*v*/, VecIn /*a*/,
+                                   const ContactForce* /*F*/, VecOut /*out*/) const {}
 
   /// The coordinate whose rate is the monitored spin speed omega (the run monitor, omega_max,
   /// the crossing of omega_lim; Carpenter's free-spin column), or -1 when the model has none.
@@ -139,6 +168,10 @@ class LagrangianModel {
 
   // ---- services for the layers above (case validation, Campbell diagram) ----
 
+  /// Kinetic plus potential energy at time t.
+  double mechanical_energy(double t, VecIn q, VecIn v) const {
+    return kinetic_energy(t, q, v) + potential_energy(t, q);
+  }
   /// The first contact that q penetrates by more than `roundoff` times its gap scale, if any
   /// (an initial state must not penetrate; a state written by a run on the constraint has d_N
   /// within round-off of 0, of either sign).

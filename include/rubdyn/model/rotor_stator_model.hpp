@@ -73,8 +73,8 @@ class RotorStatorModel final : public LagrangianModel {
   void smooth_forces(double t, VecIn q, VecIn v, VecOut f) const override;
   void smooth_force_jacobians(double t, VecIn q, VecIn v, MatOut dfdq, MatOut dfdv) const override;
   void compute_contact(int k, double t, VecIn q, VecIn v, ContactKinematics& c) const override;
-  double kinetic_energy(VecIn q, VecIn v) const override;
-  double potential_energy(VecIn q) const override;
+  double kinetic_energy(double t, VecIn q, VecIn v) const override;
+  double potential_energy(double t, VecIn q) const override;
   SmoothPower smooth_power(double t, VecIn q, VecIn v) const override;
   double gap_scale(int /*k*/ = 0) const override { return p_.stator.gap; }
   const ContactLaw& contact_law(int /*k*/ = 0) const override { return p_.contact; }

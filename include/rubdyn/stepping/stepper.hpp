@@ -26,7 +26,7 @@ std::string_view to_string(StepOutcome o);
 /// state at t_{i+1}; Carpenter's velocity at t_i is central, so its step i completes t_i.
 struct StepReport {
   StepReport() = default;
-  explicit StepReport(int n) : q(Vec::Zero(n)), v(Vec::Zero(n)) {}
+  explicit StepReport(int n) : q(Vec::Zero(n)), v(Vec::Zero(n)), a(Vec::Zero(n)) {}
   /// Every field but q and v back to its default (the vectors keep their storage).
   void reset() {
     index = 0;
@@ -35,8 +35,12 @@ struct StepReport {
     newton_iters = 0;
     nonunique = unconverged = false;
   }
-  long index = 0;             ///< the state is at t_0 + index h
-  Vec q, v;                   ///< the model's size
+  long index = 0;  ///< the state is at t_0 + index h
+  Vec q, v;        ///< the model's size
+  /// The scheme's acceleration at the state: Moreau-Jean's mean over the step (v_{i+1} - v_i)/h
+  /// (an impulse included), Carpenter's central second difference. For the power of a
+  /// rheonomic drive and for the model's observables.
+  Vec a;
   double F_N = 0, F_T = 0;    ///< contact force (Moreau-Jean: impulse / h)
   double P_N = 0, P_T = 0;    ///< impulse of the step
   Phase phase = Phase::Free;  ///< contact status of the step

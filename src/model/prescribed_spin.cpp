@@ -1,0 +1,236 @@
+#include "rubdyn/model/prescribed_spin.hpp"
+
+#include <stdexcept>
+
+#include "rubdyn/core/demand.hpp"
+
+namespace rubdyn {
+
+/// Vectors and matrices of the inner model's size. One per thread: the wrapper's methods are
+/// const and a model may serve several runs at once; after the first call of a thread nothing
+/// is allocated (the sizes do not change).
+struct PrescribedSpin::Scratch {
+  Vec qf, vf, af, xf, yf, ff;
+  Mat Mf, dqf, dvf, Jf, Bf;
+  ContactKinematics cf;
+  void size(int nf) {
+    if (qf.size() == nf) return;
+    for (Vec* x : {&qf, &vf, &af, &xf, &yf, &ff}) x->setZero(nf);
+    for (Mat* A : {&Mf, &dqf, &dvf, &Jf}) A->setZero(nf, nf);
+    Bf.setZero(nf, 4);  // the solves' right-hand sides: up to 3, and the spin's unit vector
+    cf = ContactKinematics(nf);
+  }
+};
+
+PrescribedSpin::Scratch& PrescribedSpin::scratch() const {
+  thread_local Scratch s;
+  s.size(n_ + 1);
+  return s;
+}
+
+PrescribedSpin::PrescribedSpin(std::unique_ptr<LagrangianModel> inner, double t0, double theta0,
+                               double omega0, double alpha)
+    : inner_(std::move(inner)), t0_(t0), theta0_(theta0), omega0_(omega0), alpha_(alpha) {
+  s_ = inner_->spin_coordinate();
+  if (s_ < 0)
+    throw std::invalid_argument("a prescribed spin needs a model with a spin coordinate; '" +
+                                std::string(inner_->name()) + "' has none");
+  n_ = inner_->num_dofs() - 1;
+  for (int i = 0; i <= n_; ++i)
+    if (i != s_) coords_.push_back(inner_->coordinates()[static_cast<std::size_t>(i)]);
+}
+
+double PrescribedSpin::theta(double t) const {
+  const double dt = t - t0_;
+  return theta0_ + omega0_ * dt + 0.5 * alpha_ * dt * dt;
+}
+
+namespace {
+
+/// The full vector of x with `value` inserted at s.
+void insert(VecIn x, int s, double value, Vec& full) {
+  const auto n = x.size();
+  RUBDYN_DEMAND(full.size() == n + 1);  // a vector of the model's size (num_dofs())
+  for (Eigen::Index i = 0, j = 0; j <= n; ++j) full[j] = j == s ? value : x[i++];
+}
+
+/// x without its entry s.
+void drop(const Vec& full, int s, VecOut x) {
+  for (Eigen::Index i = 0, j = 0; j < full.size(); ++j)
+    if (j != s) x[i++] = full[j];
+}
+
+/// A without its row and column s.
+void drop(const Mat& full, int s, MatOut A) {
+  const auto n = full.rows();
+  for (Eigen::Index c = 0, jc = 0; jc < n; ++jc) {
+    if (jc == s) continue;
+    for (Eigen::Index r = 0, jr = 0; jr < n; ++jr)
+      if (jr != s) A(r++, c) = full(jr, jc);
+    ++c;
+  }
+}
+
+}  // namespace
+
+void PrescribedSpin::embed(double t, VecIn q, VecIn v, Scratch& s) const {
+  insert(q, s_, theta(t), s.qf);
+  insert(v, s_, omega(t), s.vf);
+}
+
+void PrescribedSpin::mass_matrix(VecIn q, MatOut M) const {
+  Scratch& s = scratch();
+  insert(q, s_, theta0_, s.qf);  // (M without the spin's row and column does not depend on it)
+  inner_->mass_matrix(s.qf, s.Mf);
+  drop(s.Mf, s_, M);
+}
+
+void PrescribedSpin::mass_product(VecIn q, VecIn x, VecOut y) const {
+  Scratch& s = scratch();
+  insert(q, s_, theta0_, s.qf);
+  insert(x, s_, 0.0, s.xf);
+  inner_->mass_product(s.qf, s.xf, s.yf);
+  drop(s.yf, s_, y);
+}
+
+void PrescribedSpin::solve_mass(VecIn q, MatOut B) const {
+  // With the inner inverse [[A, u], [u^T, sigma]] (spin last, for the argument), the inverse
+  // of the block without the spin is A - u u^T / sigma: the inner solve of (b, 0) gives
+  // (A b, u^T b), of e_spin gives (u, sigma).
+  Scratch& s = scratch();
+  const Eigen::Index k = B.cols();
+  insert(q, s_, theta0_, s.qf);
+  if (s.Bf.cols() < k + 1) s.Bf.resize(n_ + 1, k + 1);  // (more right-hand sides than ever)
+  auto Bk = s.Bf.leftCols(k + 1);
+  for (Eigen::Index j = 0; j < k; ++j) {
+    insert(B.col(j), s_, 0.0, s.xf);
+    Bk.col(j) = s.xf;
+  }
+  Bk.col(k).setZero();
+  Bk(s_, k) = 1.0;
+  inner_->solve_mass(s.qf, Bk);
+  const double sigma = Bk(s_, k);
+  for (Eigen::Index j = 0; j < k; ++j) {
+    const double w = Bk(s_, j) / sigma;
+    for (Eigen::Index i = 0, r = 0; r <= n_; ++r)
+      if (r != s_) B(i++, j) = Bk(r, j) - Bk(r, k) * w;
+  }
+}
+
+void PrescribedSpin::mass_matrix_product_jacobian(VecIn q, VecIn a, MatOut J) const {
+  Scratch& s = scratch();
+  insert(q, s_, theta0_, s.qf);
+  insert(a, s_, 0.0, s.af);
+  inner_->mass_matrix_product_jacobian(s.qf, s.af, s.Jf);
+  drop(s.Jf, s_, J);
+}
+
+void PrescribedSpin::smooth_forces(double t, VecIn q, VecIn v, VecOut f) const {
+  // f = f_f - M_f e_spin alpha, without the spin's row
+  Scratch& s = scratch();
+  embed(t, q, v, s);
+  inner_->smooth_forces(t, s.qf, s.vf, s.ff);
+  if (alpha_ != 0.0) {
+    s.xf.setZero();
+    s.xf[s_] = alpha_;
+    inner_->mass_product(s.qf, s.xf, s.yf);
+    s.ff -= s.yf;
+  }
+  drop(s.ff, s_, f);
+}
+
+void PrescribedSpin::smooth_force_jacobians(double t, VecIn q, VecIn v, MatOut dfdq,
+                                            MatOut dfdv) const {
+  Scratch& s = scratch();
+  embed(t, q, v, s);
+  inner_->smooth_force_jacobians(t, s.qf, s.vf, s.dqf, s.dvf);
+  if (alpha_ != 0.0) {
+    s.af.setZero();
+    s.af[s_] = alpha_;
+    inner_->mass_matrix_product_jacobian(s.qf, s.af, s.Jf);
+    s.dqf -= s.Jf;
+  }
+  drop(s.dqf, s_, dfdq);
+  drop(s.dvf, s_, dfdv);
+}
+
+void PrescribedSpin::compute_contact(int k, double t, VecIn q, VecIn v,
+                                     ContactKinematics& c) const {
+  Scratch& s = scratch();
+  embed(t, q, v, s);
+  inner_->compute_contact(k, t, s.qf, s.vf, s.cf);
+  drop(s.cf.W_N, s_, c.W_N);
+  drop(s.cf.W_T, s_, c.W_T);
+  const double wn = s.cf.W_N[s_], wt = s.cf.W_T[s_], om = omega(t);
+  c.d_N = s.cf.d_N;
+  c.v_N = s.cf.v_N;
+  c.v_t = s.cf.v_t;
+  c.b_N = s.cf.b_N + wn * om;
+  c.b_T = s.cf.b_T + wt * om;
+  c.wdot_N = s.cf.wdot_N + wn * alpha_;
+  c.wdot_T = s.cf.wdot_T + wt * alpha_;
+  c.normal_defined = s.cf.normal_defined;
+}
+
+double PrescribedSpin::kinetic_energy(double t, VecIn q, VecIn v) const {
+  Scratch& s = scratch();
+  embed(t, q, v, s);
+  return inner_->kinetic_energy(t, s.qf, s.vf);
+}
+
+double PrescribedSpin::potential_energy(double t, VecIn q) const {
+  Scratch& s = scratch();
+  insert(q, s_, theta(t), s.qf);
+  return inner_->potential_energy(t, s.qf);
+}
+
+SmoothPower PrescribedSpin::smooth_power(double t, VecIn q, VecIn v) const {
+  // the dampers' (the inner model has no drive torque; the drive's power is applied_power)
+  Scratch& s = scratch();
+  embed(t, q, v, s);
+  return {0.0, inner_->smooth_power(t, s.qf, s.vf).damping};
+}
+
+double PrescribedSpin::drive_torque(double t, VecIn q, VecIn v, VecIn a,
+                                    const ContactForce* F) const {
+  // tau_d = [M_f a_f]_theta - f_f,theta - sum_k (W_N,theta F_N + W_T,theta F_T) (header)
+  Scratch& s = scratch();
+  embed(t, q, v, s);
+  insert(a, s_, alpha_, s.af);
+  inner_->mass_product(s.qf, s.af, s.yf);
+  inner_->smooth_forces(t, s.qf, s.vf, s.ff);
+  double tau = s.yf[s_] - s.ff[s_];
+  for (int k = 0; k < inner_->contact_count(); ++k) {
+    if (F[k].F_N == 0.0 && F[k].F_T == 0.0) continue;
+    inner_->compute_contact(k, t, s.qf, s.vf, s.cf);
+    tau -= s.cf.W_N[s_] * F[k].F_N + s.cf.W_T[s_] * F[k].F_T;
+  }
+  return tau;
+}
+
+double PrescribedSpin::applied_power(double t, VecIn q, VecIn v, VecIn a,
+                                     const ContactForce* F) const {
+  return drive_torque(t, q, v, a, F) * omega(t);
+}
+
+const std::vector<Observable>& PrescribedSpin::observables() const {
+  static const std::vector<Observable> obs = {
+      {"theta", "rad", "the prescribed spin angle"},
+      {"omega", "rad/s", "the prescribed spin speed"},
+      {"drive_torque", "N m", "the torque that holds the prescribed speed"},
+  };
+  return obs;
+}
+
+void PrescribedSpin::compute_observables(double t, VecIn q, VecIn v, VecIn a, const ContactForce* F,
+                                         VecOut out) const {
+  out[0] = theta(t);
+  out[1] = omega(t);
+  out[2] = drive_torque(t, q, v, a, F);
+}
+
+double PrescribedSpin::spin(double t, VecIn /*q*/, VecIn /*v*/) const {
+  return omega(t);
+}
+
+}  // namespace rubdyn
