@@ -736,7 +736,9 @@ def sample_powers(o, P):
     """Powers at every sample: drive tau(Omega) Omega, dampers, friction F_T v_t."""
     s = cf.short(P)
     Om = o.col["omega"]
-    if s["torque_law"] == "linear":
+    if o.has("drive_torque"):         # a prescribed spin: the torque that holds it
+        tau = o.col["drive_torque"]
+    elif s["torque_law"] == "linear":
         tau = s["tau"] * (1 - Om / s["Omega_0"])
     else:
         tau = s["tau"] * np.ones_like(Om)
@@ -791,7 +793,7 @@ def power_window(st, rubdyn, case, src_out, t1, periods, w, P, tol, label, drive
 
 
 def study_power(rubdyn, out, rigid_st, roll_sts, whip_st, tol=TIGHT, periods=50,
-                whip_periods=20):
+                whip_periods=20, unb_st=None):
     """Power balance over windows of whole whirl periods of converged steady orbits: the
     rigid stator's rolling, both Black rolling branches, and the locked whip (whose spin energy
     changes: drive + dampers + friction = d(J Omega^2/2)/dt)."""
@@ -843,6 +845,19 @@ def study_power(rubdyn, out, rigid_st, roll_sts, whip_st, tol=TIGHT, periods=50,
         damp = -root["w"] ** 2 * (s["c_r"] * zr ** 2 + s["c_s"] * zs ** 2)
         power_window(st, rubdyn, case, o, t1, whip_periods, root["w"], P, tol, "whip",
                      drive, diss_cf=-(damp + fric), fric_cf=fric / drive, dE_cf=dE)
+    # the unbalance at a prescribed speed: tau_d Omega = c_r Omega^2 g0^2 (rigid stator: the
+    # rotor's orbit is the contact circle) + mu N (g0 + R) Omega, friction's share by (5.1)
+    if unb_st is not None and unb_st.status == "ok":
+        P = unb_params()
+        s = cf.short(P)
+        big = unb_st.roots[0]
+        o = unb_st.outs[("larger", 1)]
+        case = os.path.join(out, "unbalance.toml")
+        Om = OMEGA_U
+        drive = big["tau_d"] * Om
+        fric = -s["mu"] * big["N"] * (s["g0"] + s["R"]) * Om
+        power_window(st, rubdyn, case, o, 0.15, periods, Om, P, tol, "unbalance",
+                     drive, fric_cf=fric / drive, dE_cf=0.0)
     return st
 
 
@@ -957,4 +972,13 @@ def orbit_eigen(P, root, mode):
     head = [root["Omega"]] if mode == "stick" else [root["w"]]
     xi = head + [zs.real, zs.imag, (1j * root["w"] * zs).real, (1j * root["w"] * zs).imag]
     ev, _ = rs.orbit_eigenvalues(m, mode, xi)
+    return ev
+
+
+def unbalance_eigen(P, root, Omega):
+    """Eigenvalues of the forward synchronous rub orbit at a prescribed speed (slip, invariant
+    coordinates delta, phi'; rigid stator), from reference_sim's vector field."""
+    import reference_sim as rs
+    m = rs.JeffcottBlack(P)
+    ev, _ = rs.orbit_eigenvalues(m, "slip-", [root["delta"], Omega])
     return ev

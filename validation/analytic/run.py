@@ -133,7 +133,8 @@ def all_studies(rubdyn, out, tol, with_power=True, with_kinematics=True):
     S["unbalance"] = rr.study_unbalance(rubdyn, out, tol)
     if with_power:
         S["power"] = rr.study_power(rubdyn, out, S["rigid-constant"],
-                                    [S["black-low"], S["black-high"]], S["whip-approach"], tol)
+                                    [S["black-low"], S["black-high"]], S["whip-approach"], tol,
+                                    unb_st=S["unbalance"])
     if with_kinematics:
         S["kin-rigid-rotor"] = rr.study_rolling_rigid_rotor(rubdyn, out, tol)
         S["kin-rigid-rotor-projection"] = rr.study_rolling_rigid_rotor(
@@ -412,6 +413,14 @@ def main():
         for q in st.quantities:
             if q.t is not None and q.reach:
                 rates.append((key, q.name, rr.approach_rate(q.t, q.dev), -lam, every))
+    if S["unbalance"].status == "ok":
+        st = S["unbalance"]
+        ev = rr.unbalance_eigen(rr.unb_params(), st.roots[0], rr.OMEGA_U)
+        every = ", ".join("%.2f" % x for x in sorted(set(np.round(-ev.real, 6))))
+        for q in st.quantities:
+            if q.t is not None and q.reach and "prescribed" not in q.name:
+                rates.append(("unbalance", q.name, rr.approach_rate(q.t, q.dev), -max(ev.real),
+                              every + " (pair: +-%.1f i)" % abs(ev.imag).max()))
     for key in ("rigid-constant", "rigid-linear"):
         st = S[key]
         q = st.quantities[1]
