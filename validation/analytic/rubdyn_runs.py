@@ -271,6 +271,7 @@ class Quantity:
                  reach=True):
         self.name, self.closed, self.measured = name, closed, measured
         self.t, self.dev, self.note, self.unit, self.reach = t, dev, note, unit, reach
+        self.runs = None      # the output folders it was measured on (None: the study's runs)
         if closed is None or measured is None:
             self.rel = None
         elif isinstance(closed, str):
@@ -511,7 +512,8 @@ def study_black_rolling(rubdyn, out, branch, tol=TIGHT, t_end=0.8, exact=False, 
     root = black_roll_roots()[branch]
     label = ("low", "high")[branch]
     tag = "-exact" if exact else ("" if eps == PERT else "-translated")
-    st = Study("black-roll-" + label + tag, "Black's model, rolling, %s branch" % label)
+    st = Study("black-roll-" + label + tag, "Black's model, rolling, %s branch, started %s"
+               % (label, "on the orbit" if exact else "off the orbit"))
     keys0 = cf.contact_orbit_state(P, root["w"], root["Omega"], phi0=0.5)
     zs_frame = complex(keys0["initial.x_s"], keys0["initial.y_s"]) * np.exp(-0.5j)
     s = cf.short(P)
@@ -695,6 +697,7 @@ def study_unbalance(rubdyn, out, tol=TIGHT, t_end=0.2, dv=1e-4):
         phi, phid = o.polar()
         t = o.t
         sfx = " (start %s1e-4)" % sgnlab
+        n0 = len(st.quantities)
         st.add(Quantity("N" + sfx, big["N"], o.col["F_N"][-1], t, rel(o.col["F_N"], big["N"]),
                         unit="N"))
         st.add(Quantity("F_T = mu N" + sfx, big["F_T"], o.col["F_T"][-1], t,
@@ -710,6 +713,8 @@ def study_unbalance(rubdyn, out, tol=TIGHT, t_end=0.2, dv=1e-4):
         if o.has("drive_torque"):
             st.add(Quantity("drive torque tau_d" + sfx, big["tau_d"], o.col["drive_torque"][-1],
                             t, rel(o.col["drive_torque"], big["tau_d"]), unit="N m"))
+        for x in st.quantities[n0:]:
+            x.runs = [o.folder]
     for sgn in (1, -1):
         o = outs[("smaller", sgn)]
         lift = o.first_event("liftoff")
@@ -763,6 +768,7 @@ def power_window(st, rubdyn, case, src_out, t1, periods, w, P, tol, label, drive
     st.run("window %s: %g periods from t = %g s" % (label, periods, t1), o)
     if not o.summary["complete"]:
         return o
+    n0 = len(st.quantities)
     Wd, Wc, Wf, Wi = S["work_torque"], S["work_damping"], S["work_friction"], S["work_impacts"]
     dE = S["energy_final"] - S["energy_initial"]
     dt_w = o.t[-1] - o.t[0]
@@ -789,6 +795,8 @@ def power_window(st, rubdyn, case, src_out, t1, periods, w, P, tol, label, drive
                                                                           else 0.0))
                         / trapz(o.t, drive), reach=False))
     q.rel = abs(q.measured)
+    for x in st.quantities[n0:]:
+        x.runs = [o.folder]
     return o
 
 

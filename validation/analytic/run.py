@@ -95,6 +95,16 @@ def reach_cell(q, level, predicted=None):
 
 
 # ---- the studies ----------------------------------------------------------------------------------
+def short_status(st):
+    if st is None:
+        return "-"
+    for n in st.notes:
+        if "CV_TOO_MUCH_ACC" in n:
+            t = n.split("at t = ")[1].split(" s")[0]
+            return "stopped at t = %.3g s: CV_TOO_MUCH_ACC" % float(t)
+    return st.status
+
+
 def rigid_predicted(st):
     """The exact solution's deviations (section 2.2-2.3) on the run's sample times: the times
     the closed form itself takes to come within 1e-6 and 1e-8 of its steady state."""
@@ -294,7 +304,7 @@ def write_table(path, S, ladder, rates, label, wall_total):
                 L.append("| | | | | | | | *%s* |" % "; ".join(st.notes).replace("|", "/"))
                 continue
             start = ""
-            if key.endswith("-exact"):
+            if key.endswith("-exact") and len(keys) == 1:
                 start = " (started on the orbit)"
             if len(keys) > 1:
                 L.append("| %s | ***%s*** | | | | | | |" % (title if first else "", st.title))
@@ -304,7 +314,8 @@ def write_table(path, S, ladder, rates, label, wall_total):
                 L.append("| %s | %s%s | %s | %s | %s | %s | %s | %s |" % (
                     title if first else "", q.name, start, g13(q.closed), g13(q.measured),
                     e2(q.rel), reach_cell(q, 1e-6, p[0] if pred else None),
-                    reach_cell(q, 1e-8, p[1] if pred else None), rid))
+                    reach_cell(q, 1e-8, p[1] if pred else None),
+                    ", ".join(ids[f] for f in q.runs) if q.runs else rid))
                 first = False
             if st.status not in ("ok",):
                 L.append("| | *%s: %s* | | | | | | |" % (st.status, "; ".join(st.notes)))
@@ -359,7 +370,7 @@ def write_table(path, S, ladder, rates, label, wall_total):
             for lab, _ in LADDER:
                 st = ladder["S"][lab].get(key)
                 if st is None or st.status != "ok":
-                    cells.append(st.status if st else "-")
+                    cells.append(short_status(st))
                     continue
                 q = next((x for x in st.quantities if x.name == name), None)
                 cells.append(e2(q.rel) if q is not None else "-")
@@ -368,13 +379,41 @@ def write_table(path, S, ladder, rates, label, wall_total):
         for lab, _ in LADDER:
             st = ladder["S"][lab].get(key)
             if st is None or st.status in ("pending", "skipped"):
-                cells.append(st.status if st else "-")
+                cells.append(short_status(st))
                 continue
             cells.append("; ".join("%d steps, %.3f s%s" % (
                 o.summary["steps"], o.wall, "" if o.summary["complete"] else
                 ", " + o.summary["termination"]) for _, o in st.runs))
         L.append("| %s | steps, wall | %s |" % (key, " | ".join(cells)))
     L.append("")
+    stopped = []
+    for lab, tol in LADDER:
+        for key, st in ladder["S"][lab].items():
+            for rl, o in st.runs:
+                if not o.summary["complete"]:
+                    stopped.append((lab, tol, key, o))
+    if stopped:
+        L.append("Runs that stopped early, and the stick chart's angle when they did: in a "
+                 "stick phase rubdyn integrates theta - theta_a (theta_a: the spin angle where "
+                 "the phase began) with the absolute error weight (rtol g0 + atol) / R "
+                 "(src/hybrid/phase_system.cpp, contact_chart.hpp), while the rounding of the "
+                 "coordinate grows like eps |theta - theta_a|; CVODES stops with "
+                 "CV_TOO_MUCH_ACC once eps times the weighted RMS norm of the state exceeds 1 "
+                 "(eps = 2.2e-16):\n")
+        L.append("| setting | run | stopped at t [s] | theta - theta_a [rad] | weight (rtol g0 + "
+                 "atol) / R [rad] | eps abs(theta - theta_a) / weight | message |")
+        L.append("|---|---|---|---|---|---|---|")
+        for lab, tol, key, o in stopped:
+            c = o.case
+            w = (tol["rtol"] * c["stator"]["gap"] + tol["atol"]) / c["rotor"]["radius"]
+            stick = np.where(o.phase == "stick")[0]
+            dth = (o.col["theta"][stick[-1]] - o.col["theta"][stick[0]]) if len(stick) else 0.0
+            L.append("| rtol %g, atol %g | %s | %.6g | %.4g | %.3g | %.2f | %s |" % (
+                tol["rtol"], tol["atol"], key, o.summary["t_reached"], dth, w,
+                2.220446049250313e-16 * abs(dth) / w,
+                o.summary["message"].split(" (CVode")[0]))
+        L.append("\n(theta - theta_a at the last sample before the stop, from the phase's first "
+                 "stick sample.)\n")
     L.append("## 5. Log\n")
     L.append("```\n%s\n```" % "\n".join(LOG))
     with open(path, "w") as f:
