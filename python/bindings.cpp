@@ -21,13 +21,13 @@
 #include "rubdyn/analysis/compare.hpp"
 #include "rubdyn/analysis/postprocess.hpp"
 #include "rubdyn/core/run_types.hpp"
+#include "rubdyn/driver/simulate.hpp"
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/columns.hpp"
 #include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/io/output_folder.hpp"
-#include "rubdyn/io/simulate.hpp"
-#include "rubdyn/io/solver_registry.hpp"
+#include "rubdyn/io/solver_options.hpp"
 #include "rubdyn/model/lagrangian_model.hpp"
 
 namespace py = pybind11;
@@ -402,7 +402,7 @@ PYBIND11_MODULE(_core, m) {
         }
         return out;
       },
-      "The solver registry (io/solver_registry.hpp): name, summary, fixed_step, the [solver] keys "
+      "The solver registry (io/solver_options.hpp): name, summary, fixed_step, the [solver] keys "
       "each reads");
   m.def("load_case", &make_case_from_file, py::arg("path"),
         py::arg("overrides") = std::vector<std::string>{});

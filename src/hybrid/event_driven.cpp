@@ -21,7 +21,7 @@
 #include "event_locator.hpp"
 #include "mode_switching.hpp"
 #include "phase_system.hpp"
-#include "rubdyn/core/run_monitor.hpp"
+#include "rubdyn/core/run_envelope.hpp"
 
 namespace rubdyn {
 
@@ -38,7 +38,6 @@ class Integrator {
         opt_(opt),
         sink_(sink),
         law_(m.contact_law(0)),
-        mon_(law_.mu, opt.omega_lim),
         g0_(m.gap_scale(0)),
         atol_v_(opt.atol * 1e3),
         v_tol_(10.0 * atol_v_),
@@ -177,7 +176,9 @@ class Integrator {
     work_ = cur_->works_at(t);
     end_phase(t);
   }
-  void end_phase(double t) { sum_.phase_time[static_cast<int>(phase_)] += t - phase_start_; }
+  void end_phase(double t) {
+    env_->summary().phase_time[static_cast<int>(phase_)] += t - phase_start_;
+  }
 
   // ---- output ----
   void emit_sample(double t, const Vec& q, const Vec& v) {
@@ -212,29 +213,23 @@ class Integrator {
       const ContactForce F{cs.F_N, cs.F_T};
       m_.compute_observables(t, s.q, s.v, acc_, &F, s.observables);
     }
-    mon_.observe(t, m_.spin(t, s.q, s.v), cs.d_N, cs.v_N, cs.F_N, cs.F_T, phase_ != Phase::Free);
-    sink_.sample(s);
+    env_->sample(s, m_.spin(t, s.q, s.v), phase_ != Phase::Free);
   }
 
   /// Writes the output times before t, interpolated in the last step, before an event at t
   /// restarts the integration there: the step that found a root may have passed output times
   /// before it (single-step mode while the gap-rate witness is armed).
   void emit_outputs_before(double t) {
-    while (next_out_ < t && next_out_ < t_end_) {
-      cur_->interpolate(next_out_, q_tmp_, v_tmp_);
-      emit_sample(next_out_, q_tmp_, v_tmp_);
-      next_out_ = t_init_ + static_cast<double>(++k_out_) * opt_.output_dt;
+    while (env_->next_output() < t && env_->next_output() < t_end_) {
+      const double tout = env_->next_output();
+      cur_->interpolate(tout, q_tmp_, v_tmp_);
+      emit_sample(tout, q_tmp_, v_tmp_);
+      env_->advance_output();
     }
   }
 
-  void fail(Termination why, const std::string& msg) {
-    sum_.termination = why;
-    sum_.message = msg;
-  }
-  void log_event(const EventRecord& e) {
-    ++sum_.events[static_cast<int>(e.kind)];
-    sink_.event(e);
-  }
+  void fail(Termination why, const std::string& msg) { env_->fail(why, msg); }
+  void log_event(const EventRecord& e) { env_->event(e); }
 
   // ---- events (false: the run ends) ----
   /// Logs a transition's events and restarts where it says.
@@ -316,7 +311,7 @@ class Integrator {
       // Half-open interval rule: right after a release on the constraint (v_N = 0, and the
       // free normal acceleration ~ 0 at a lift-off) the gap rate may dip by round-off and come
       // back: that is the phase's own start, not a new gap minimum. Counted.
-      ++sum_.suppressed_witnesses;
+      ++env_->summary().suppressed_witnesses;
       return true;
     }
     switch (sw_.classify_gap_minimum(t, q, v)) {
@@ -364,7 +359,7 @@ class Integrator {
   /// One fired witness at t (the root finder's time, state (q, v)).
   bool on_root(Witness w, double t, const Vec& q, const Vec& v, bool& restarted) {
     if (w == Witness::Omega) {
-      mon_.set_omega_lim_time(t);
+      env_->monitor().set_omega_lim_time(t);
       omega_pending_ = false;
       return true;
     }
@@ -409,8 +404,7 @@ class Integrator {
   const EventDrivenOptions& opt_;
   OutputSink& sink_;
   const ContactLaw law_;
-  RunMonitor mon_;
-  RunSummary sum_;
+  std::optional<RunEnvelope> env_;  // the books of the run (core/run_envelope.hpp)
   const double g0_, atol_v_, v_tol_, graze_tol_;
   ModeSwitcher sw_;
   EventGuard guard_;
@@ -429,33 +423,27 @@ class Integrator {
   ContactOperators op_;
   PhaseDynamics dyn_;
   ContactKinematics kin_;
-  Vec q_restart_, v_restart_;         // where the current phase (re)started
-  Vec q_tmp_, v_tmp_;                 // interpolated states (outputs, the localisers)
-  Vec q_ev_, v_ev_;                   // the state at an event
-  Vec acc_;                           // the accelerations at a sample (the observables)
-  double t_init_ = 0, next_out_ = 0;  // output grid t_init_ + k output_dt, next time to write
-  long k_out_ = 1;
+  Vec q_restart_, v_restart_;  // where the current phase (re)started
+  Vec q_tmp_, v_tmp_;          // interpolated states (outputs, the localisers)
+  Vec q_ev_, v_ev_;            // the state at an event
+  Vec acc_;                    // the accelerations at a sample (the observables)
   Works work_{};
   double work_impacts_ = 0.0;
 };
 
 RunSummary Integrator::run(const MechanicalState& init, double t_end) {
-  const auto wall0 = std::chrono::steady_clock::now();
   t_end_ = t_end;
-  sum_.solver = "event";
-  sum_.options = fmt::format(
-      "{{\"rtol\": {:.3g}, \"atol\": {:.3g}, \"free_flight\": \"{}\", \"contact_phases\": "
-      "\"{}\", \"adams_iteration\": \"{}\", \"output_dt\": {:.6g}}}",
-      opt_.rtol, opt_.atol, opt_.adams ? "adams" : "bdf",
-      chart_ ? (opt_.contact_adams ? "reduced+adams" : "reduced+bdf") : "bdf+projection",
-      opt_.fixed_point ? "fixed-point" : "newton", opt_.output_dt);
-  sum_.t_start = init.t;
-  sum_.t_end_requested = t_end;
-  sum_.energy_initial = m_.mechanical_energy(init.t, init.q, init.v);
+  env_.emplace(m_, opt_, sink_, init, t_end, "event",
+               fmt::format("{{\"rtol\": {:.3g}, \"atol\": {:.3g}, \"free_flight\": \"{}\", "
+                           "\"contact_phases\": \"{}\", \"adams_iteration\": \"{}\", "
+                           "\"output_dt\": {:.6g}}}",
+                           opt_.rtol, opt_.atol, opt_.adams ? "adams" : "bdf",
+                           chart_ ? (opt_.contact_adams ? "reduced+adams" : "reduced+bdf")
+                                  : "bdf+projection",
+                           opt_.fixed_point ? "fixed-point" : "newton", opt_.output_dt));
+  RunSummary& sum = env_->summary();
   double t = init.t;
   Vec q = init.q, v = init.v;
-  t_init_ = init.t;
-  next_out_ = init.t + opt_.output_dt;
   bool ok = true;
   // A root that needed no restart, kept for recovery: CVODE stops when a witness is zero both
   // at the last root and just after it ("root found at and very near"), which a degenerate
@@ -477,19 +465,19 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
     }
     while (ok && t < t_end_) {
       // advance (per-phase cost: steps and wall time of the integration itself)
-      const double tout = std::min(next_out_, t_end_);
+      const double tout = std::min(env_->next_output(), t_end_);
       const bool arming = gap_rate_deferred_ || gap_banded_;
       const int ph = static_cast<int>(phase_);
       const long steps0 = cur_->session().steps_since_restart();
       const auto wall_adv = std::chrono::steady_clock::now();
       const Status st = cur_->advance(tout, t, q, v, arming);
-      sum_.phase_wall[ph] +=
+      sum.phase_wall[ph] +=
           std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_adv).count();
-      sum_.phase_steps[ph] += cur_->session().steps_since_restart() - steps0;
+      sum.phase_steps[ph] += cur_->session().steps_since_restart() - steps0;
       // classify
       if (st == Status::Failure && root_without_restart && recoveries < 100) {
         ++recoveries;
-        ++sum_.suppressed_witnesses;
+        ++sum.suppressed_witnesses;
         root_without_restart = false;
         end_phase(t_root);
         work_ = work_root;
@@ -515,25 +503,10 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
       if (st == Status::Step) continue;
       if (st == Status::Reached) {
         emit_sample(t, q, v);
-        if (opt_.progress)
-          opt_.progress(t, std::accumulate(sum_.events.begin(), sum_.events.end(), 0L),
-                        m_.spin(t, q, v), phase_);
-        if (opt_.stop && t < t_end_ && opt_.stop->load(std::memory_order_relaxed)) {
-          fail(Termination::Interrupted, fmt::format("interrupted at t = {:.17g}", t));
-          break;
-        }
-        if (opt_.max_wall > 0.0 && t < t_end_) {
-          const double spent =
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-          if (spent > opt_.max_wall) {
-            fail(Termination::TimeBudget,
-                 fmt::format("wall-time budget of {} s spent ({:.3g} s) at t = {:.17g}",
-                             opt_.max_wall, spent, t));
-            break;
-          }
-        }
-        if (t >= tout && tout == next_out_)
-          next_out_ = t_init_ + static_cast<double>(++k_out_) * opt_.output_dt;
+        env_->progress(t, m_.spin(t, q, v), phase_);
+        // (not at the end: a run that reached t_end is complete)
+        if (t < t_end_ && (env_->stop_requested(t) || env_->budget_spent(t))) break;
+        if (t >= tout && tout == env_->next_output()) env_->advance_output();
         continue;
       }
       // dispatch the roots. In single-step mode (arming the gap-rate witness) the step that
@@ -572,28 +545,18 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
 
   // Close the books.
   end_phase(t);
-  sum_.t_reached = t;
   if (cur_) work_ = cur_->works();
-  sum_.energy_final = m_.mechanical_energy(t, q, v);
-  sum_.work_torque = work_[0];
-  sum_.work_damping = work_[1];
-  sum_.work_friction = work_[2];
-  sum_.work_impacts = work_impacts_;
-  sum_.close_energy_balance();
-  mon_.fill(sum_);
   for (const auto* s : {free_.get(), contact_.get(), slip_.get(), stick_.get()}) {
     if (!s) continue;
     const auto st = s->session().stats();
-    sum_.steps += st.steps;
-    sum_.rhs_evals += st.rhs_evals;
-    sum_.jac_evals += st.jac_evals;
-    sum_.root_evals += st.root_evals;
-    sum_.newton_iters += st.newton_iters;
+    sum.steps += st.steps;
+    sum.rhs_evals += st.rhs_evals;
+    sum.jac_evals += st.jac_evals;
+    sum.root_evals += st.root_evals;
+    sum.newton_iters += st.newton_iters;
   }
-  sum_.wall_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  sink_.end(sum_);
-  return sum_;
+  return env_->finish(t, m_.mechanical_energy(t, q, v),
+                      {work_[0], work_[1], work_[2], work_impacts_});
 }
 
 }  // namespace

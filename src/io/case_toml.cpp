@@ -19,7 +19,7 @@
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/model_registry.hpp"
-#include "rubdyn/io/solver_registry.hpp"
+#include "rubdyn/io/solver_options.hpp"
 #include "rubdyn/io/text_files.hpp"
 #include "rubdyn/stepping/fixed_step.hpp"
 
@@ -777,53 +777,11 @@ class Loader {
       issue("solver.projection", at("solver.projection"), "\"" + so.projection + "\"",
             "must be mass or identity");
     }
-    // The event-driven options: the rules are stated once, in hybrid/event_driven.cpp.
-    {
-      EventDrivenOptions eo;
-      eo.rtol = so.rtol;
-      eo.atol = so.atol;
-      eo.max_events_per_second = so.max_events_per_second;
-      eo.output_dt = c.output.dt;
-      static const std::map<std::string, std::string> key_of = {
-          {"rtol", "solver.rtol"},
-          {"atol", "solver.atol"},
-          {"max_events_per_second", "solver.max_events_per_second"}};
-      for (const auto& p : event_driven_option_problems(eo)) {
-        if (!key_of.count(p.option)) continue;  // output_dt: the fixed-step rules report it
-        const std::string& key = key_of.at(p.option);
-        const toml::node* n = at(key);
-        issue(key, n, n ? node_text(*n) : p.value + " (default)", p.rule);
-      }
-    }
-    // The fixed-step options: the rules are stated once, in stepping/fixed_step.cpp. The step
-    // count rules (a whole number of steps, at most kMaxFixedSteps) apply to fixed-step runs.
-    {
-      FixedStepOptions fo;
-      fo.h = so.h;
-      fo.itmax = so.itmax;
-      fo.qn_tol = so.qn_tol;
-      fo.theta = so.theta;
-      fo.eta = so.eta;
-      fo.output_every = c.output.every;
-      fo.output_dt = c.output.dt;
-      fo.max_wall = c.run.max_wall;  // (the event-driven check states the same rule: not mapped)
-      auto bad = fixed_step_option_problems(fo);
-      if (fixed_step) {
-        for (auto& p : fixed_step_count_problems(fo.h, c.run.t_start, c.run.t_end))
-          bad.push_back(p);
-      }
-      static const std::map<std::string, std::string> key_of = {
-          {"h", "solver.h"},           {"itmax", "solver.itmax"},
-          {"qn_tol", "solver.qn_tol"}, {"theta", "solver.theta"},
-          {"eta", "solver.eta"},       {"t_end", "run.t_end"},
-          {"output_dt", "output.dt"},  {"output_every", "output.every"},
-          {"max_wall", "run.max_wall"}};
-      for (const auto& p : bad) {
-        const std::string& key = key_of.at(p.option);
-        if (key == "run.t_end" && !(c.run.t_end > c.run.t_start)) continue;  // reported above
-        const toml::node* n = at(key);
-        issue(key, n, n ? node_text(*n) : p.value + " (default)", p.rule);
-      }
+    // The solvers' options, through the one mapping from a case to them
+    // (io/solver_options.hpp, which the run uses too): each family states its own rules.
+    for (const KeyProblem& p : solver_option_problems(c)) {
+      const toml::node* n = at(p.key);
+      issue(p.key, n, n ? node_text(*n) : p.value + " (default)", p.rule);
     }
     // Output size: at most kMaxOutputRows rows (output.dt = 1e-300 once wrote 117 MB in 5 s on
     // its way to 1e297 rows; t_end = 1e300 is the same mistake).
