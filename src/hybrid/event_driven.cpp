@@ -38,16 +38,12 @@ class Integrator {
         opt_(opt),
         sink_(sink),
         law_(m.contact_law(0)),
-        g0_(m.gap_scale(0)),
-        atol_v_(opt.atol * 1e3),
-        v_tol_(10.0 * atol_v_),
-        // positions are resolved to about atol + rtol |q| with |q| ~ the gap scale near contact
-        graze_tol_(10.0 * (opt.atol + opt.rtol * g0_)),
-        // A gap minimum within this band of 0 is logged as grazing (and decided by the contact
-        // problem). The band is wider than the local tolerance because the global error of the
-        // orbit is (measured: 1e-8 on a unit amplitude at rtol 1e-10); logging a near-miss
-        // changes nothing in the motion, since at a minimum of free flight d_N'' >= 0.
-        sw_(m, SwitchTolerances{v_tol_, graze_tol_, std::max(graze_tol_, 1e-6 * g0_), g0_}),
+        tol_(SwitchTolerances::derive(opt.rtol, opt.atol, m.gap_scale(0))),
+        g0_(tol_.g0),
+        atol_v_(tol_.atol_v),
+        v_tol_(tol_.v_tol),
+        graze_tol_(tol_.graze_tol),
+        sw_(m, tol_),
         guard_(opt.max_events_per_second),
         sample_(n_, 1, static_cast<int>(m.observables().size())),
         op_(n_),
@@ -61,7 +57,7 @@ class Integrator {
         v_ev_(Vec::Zero(n_)),
         acc_(Vec::Zero(n_)) {
     wit_.g0 = g0_;
-    wit_.v_ref = std::max(1e3 * g0_, 1e-300);
+    wit_.v_ref = tol_.v_ref;
     wit_.omega_lim = opt.omega_lim;
     omega_pending_ = opt.omega_lim > 0.0 && m.spin_coordinate() >= 0;
     if (opt.contact_phases == ContactFormulation::Reduced) chart_ = m.contact_chart();
@@ -147,7 +143,7 @@ class Integrator {
     } else {
       double FN = 0, FT = 0;
       s->forces(t, qs, vs, FN, FT);
-      wit_.F_ref = std::max({wit_.F_ref, std::abs(FN), 1e-6});
+      wit_.F_ref = std::max({wit_.F_ref, std::abs(FN), kForceRefFloor});
     }
     t_restart_ = t;
     cur_ = s;
@@ -307,7 +303,7 @@ class Integrator {
   }
 
   bool on_gap_minimum(double t, const Vec& q, const Vec& v, bool& restarted) {
-    if (t - phase_start_ <= 1e-12 * std::max(1.0, std::abs(t))) {
+    if (t - phase_start_ <= kPhaseStartRel * std::max(1.0, std::abs(t))) {
       // Half-open interval rule: right after a release on the constraint (v_N = 0, and the
       // free normal acceleration ~ 0 at a lift-off) the gap rate may dip by round-off and come
       // back: that is the phase's own start, not a new gap minimum. Counted.
@@ -323,7 +319,8 @@ class Integrator {
         restarted = true;
         close_phase(t);
         emit_sample(t, q, v);
-        return apply(t, sw_.on_constraint(t, q, v, sw_.grazing_record(t, q, v, false), 1e-9));
+        return apply(
+            t, sw_.on_constraint(t, q, v, sw_.grazing_record(t, q, v, false), kDecisionBandRel));
       case ModeSwitcher::GapMinimum::Crossed: {
         // the gap closed and reopened inside the step: back to its first crossing
         restarted = true;
@@ -349,11 +346,12 @@ class Integrator {
     e.v_N_minus = c.v_N;
     e.v_t_minus = c.v_t;
     e.witness = witness_name(w);  // the kind follows from the decision (on_constraint)
-    // Decided with a band of 1e-7 relative: the witness is zero at the event to the accuracy
-    // of the root location on the interpolant, so a margin of that size is a zero, not a sign.
-    // The phase whose witness fired cannot continue (tie rule 1 of coulomb_signorini.hpp).
-    return apply(t,
-                 sw_.on_constraint(t, q, v, e, 1e-7, w == Witness::SlipSpeed, phase_, wit_.F_ref));
+    // Decided with the witness band (kWitnessBandRel): the witness is zero at the event to the
+    // accuracy of the root location on the interpolant, so a margin of that size is a zero, not
+    // a sign. The phase whose witness fired cannot continue (tie rule 1 of
+    // coulomb_signorini.hpp).
+    return apply(t, sw_.on_constraint(t, q, v, e, kWitnessBandRel, w == Witness::SlipSpeed, phase_,
+                                      wit_.F_ref));
   }
 
   /// One fired witness at t (the root finder's time, state (q, v)).
@@ -396,7 +394,7 @@ class Integrator {
     e.t = t;
     e.kind = EventKind::Contact;
     e.witness = "initial state on the constraint";
-    return apply(t, sw_.on_constraint(t, q, v, e, 1e-9));
+    return apply(t, sw_.on_constraint(t, q, v, e, kDecisionBandRel));
   }
 
   const LagrangianModel& m_;
@@ -405,6 +403,7 @@ class Integrator {
   OutputSink& sink_;
   const ContactLaw law_;
   std::optional<RunEnvelope> env_;  // the books of the run (core/run_envelope.hpp)
+  const SwitchTolerances tol_;      // decision_tolerances.hpp
   const double g0_, atol_v_, v_tol_, graze_tol_;
   ModeSwitcher sw_;
   EventGuard guard_;
