@@ -844,33 +844,47 @@ std::string toml_quote(std::string_view text) {
   return quoted_string(text);
 }
 
+std::vector<CaseEntry> case_values(const CaseSpec& c) {
+  std::vector<CaseEntry> out;
+  CaseSpec copy = c;  // schema accessors take a mutable CaseSpec
+  for (const auto& ks : schema(c)) {
+    if (ks.refused && !ks.refused(c).empty()) continue;  // not a key of this case
+    CaseEntry e{ks.section, ks.key, {}};
+    switch (ks.kind) {
+      case Kind::Number: e.value = *ks.num(copy); break;
+      case Kind::Integer: e.value = *ks.integer(copy); break;
+      case Kind::String: e.value = *ks.text(copy); break;
+      case Kind::Bool: e.value = *ks.flag(copy); break;
+      case Kind::Choice: e.value = ks.get(c); break;
+    }
+    out.push_back(std::move(e));
+  }
+  return out;
+}
+
 std::string to_toml(const CaseSpec& c) {
   std::string out = fmt::format("# resolved case: every key with its value (rubdyn)\nname = {}\n",
                                 toml_quote(c.name));
-  CaseSpec copy = c;  // schema accessors take a mutable CaseSpec
   std::string section;
-  for (const auto& ks : schema(c)) {
-    if (ks.refused && !ks.refused(c).empty()) continue;  // not a key of this case
-    if (section != ks.section) {
-      section = ks.section;
+  for (const CaseEntry& e : case_values(c)) {
+    if (section != e.section) {
+      section = e.section;
       out += fmt::format("\n[{}]\n", section);
     }
-    switch (ks.kind) {
-      case Kind::Number: {
-        // shortest round-trip digits, always as a TOML float: "-0" would read back as the
-        // integer 0 and lose the sign of -0.0 (found by tests/fuzz)
-        std::string v = fmt::format("{}", *ks.num(copy));
-        if (v.find_first_of(".eEn") == std::string::npos) v += ".0";
-        out += fmt::format("{} = {}\n", ks.key, v);
-        break;
-      }
-      case Kind::Integer: out += fmt::format("{} = {}\n", ks.key, *ks.integer(copy)); break;
-      case Kind::String: out += fmt::format("{} = {}\n", ks.key, toml_quote(*ks.text(copy))); break;
-      case Kind::Bool:
-        out += fmt::format("{} = {}\n", ks.key, *ks.flag(copy) ? "true" : "false");
-        break;
-      case Kind::Choice: out += fmt::format("{} = {}\n", ks.key, toml_quote(ks.get(c))); break;
+    std::string v;
+    if (const double* x = std::get_if<double>(&e.value)) {
+      // shortest round-trip digits, always as a TOML float: "-0" would read back as the
+      // integer 0 and lose the sign of -0.0 (found by tests/fuzz)
+      v = fmt::format("{}", *x);
+      if (v.find_first_of(".eEn") == std::string::npos) v += ".0";
+    } else if (const int* i = std::get_if<int>(&e.value)) {
+      v = fmt::format("{}", *i);
+    } else if (const bool* f = std::get_if<bool>(&e.value)) {
+      v = *f ? "true" : "false";
+    } else {
+      v = toml_quote(std::get<std::string>(e.value));
     }
+    out += fmt::format("{} = {}\n", e.key, v);
   }
   return out;
 }
