@@ -21,13 +21,14 @@
 #include "rubdyn/analysis/compare.hpp"
 #include "rubdyn/analysis/postprocess.hpp"
 #include "rubdyn/core/run_types.hpp"
+#include "rubdyn/driver/simulate.hpp"
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/columns.hpp"
 #include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/io/output_folder.hpp"
-#include "rubdyn/io/simulate.hpp"
-#include "rubdyn/io/solver_registry.hpp"
+#include "rubdyn/io/output_reader.hpp"
+#include "rubdyn/io/solver_options.hpp"
 #include "rubdyn/model/lagrangian_model.hpp"
 
 namespace py = pybind11;
@@ -251,31 +252,11 @@ py::tuple analyze_columns(const Case& c, const py::dict& columns, long events, d
     const auto a = col(sc.name.c_str());
     if (static_cast<std::size_t>(a.size()) != n)
       throw py::value_error("column " + sc.name + " is not as long as t");
-    for (std::size_t i = 0; i < n; ++i) {
-      const double x = a.at(static_cast<py::ssize_t>(i));
-      Sample& s = r.samples[i];
-      switch (sc.field) {
-        case SampleField::Time: s.t = x; break;
-        case SampleField::Position: s.q[sc.index] = x; break;
-        case SampleField::Velocity: s.v[sc.index] = x; break;
-        case SampleField::Observable: s.observables[sc.index] = x; break;
-        default: {
-          ContactSample& k = s.contacts[static_cast<std::size_t>(sc.index)];
-          switch (sc.field) {
-            case SampleField::Gap: k.d_N = x; break;
-            case SampleField::GapRate: k.v_N = x; break;
-            case SampleField::SlipSpeed: k.v_t = x; break;
-            case SampleField::NormalForce: k.F_N = x; break;
-            case SampleField::TangentialForce: k.F_T = x; break;
-            case SampleField::Phase:
-              if (!(x >= 0 && x <= static_cast<double>(Phase::Stick) && x == static_cast<int>(x)))
-                throw py::value_error("phase codes must be 0 (free) to 3 (stick)");
-              k.phase = static_cast<Phase>(static_cast<int>(x));
-              break;
-            default: break;
-          }
-        }
-      }
+    try {
+      for (std::size_t i = 0; i < n; ++i)
+        set_sample_value(r.samples[i], sc, a.at(static_cast<py::ssize_t>(i)));
+    } catch (const std::invalid_argument& e) {
+      throw py::value_error(e.what());
     }
   }
   std::vector<DerivedSample> d = derive(r);
@@ -359,8 +340,29 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("t_end", [](const Case& c) { return c.spec.run.t_end; })
       .def_property_readonly("omega_lim", [](const Case& c) { return c.spec.run.omega_lim; })
       .def_property_readonly("output_dt", [](const Case& c) { return c.spec.output.dt; })
+      .def_property_readonly(
+          "kind", [](const Case& c) { return c.spec.model; },
+          "[model] kind: \"rigid-rotor\" or \"jeffcott\"")
       .def_property_readonly("model",
                              [](const Case& c) { return std::string(build_model(c.spec)->name()); })
+      .def(
+          "values",
+          [](const Case& c) {
+            py::dict d;
+            for (const CaseEntry& e : case_values(c.spec)) d[py::str(e.full())] = e.value;
+            return d;
+          },
+          "Every key of the case (\"section.key\") with its value, defaults and overrides "
+          "filled in: case.resolved.toml as a dict")
+      .def(
+          "__getitem__",
+          [](const Case& c, const std::string& key) {
+            for (const CaseEntry& e : case_values(c.spec))
+              if (e.full() == key) return py::cast(e.value);
+            throw py::key_error(key + ": not a key of this " + c.spec.model +
+                                " case (Case.values() lists them)");
+          },
+          "The value of one key, e.g. case[\"rotor.mass\"]")
       .def_property_readonly("gap", [](const Case& c) { return build_model(c.spec)->gap_scale(0); })
       .def_property_readonly("radius",
                              [](const Case& c) { return build_model(c.spec)->contact_radius(0); })
@@ -402,7 +404,7 @@ PYBIND11_MODULE(_core, m) {
         }
         return out;
       },
-      "The solver registry (io/solver_registry.hpp): name, summary, fixed_step, the [solver] keys "
+      "The solver registry (io/solver_options.hpp): name, summary, fixed_step, the [solver] keys "
       "each reads");
   m.def("load_case", &make_case_from_file, py::arg("path"),
         py::arg("overrides") = std::vector<std::string>{});
@@ -425,6 +427,42 @@ PYBIND11_MODULE(_core, m) {
       },
       py::arg("case"), py::arg("omega_max") = py::none(), py::arg("points") = 201,
       py::arg("damped") = false);
+
+  // rubdyn.read: the C++ reader of output folders (io/output_reader.hpp), the one the CLI uses.
+  m.def(
+      "read_run",
+      [](const std::string& dir) {
+        RunFiles f;
+        {
+          py::gil_scoped_release release;
+          try {
+            f = read_run_files(dir);
+          } catch (const std::runtime_error& e) {  // a bad file: its name, line, column
+            py::gil_scoped_acquire acquire;
+            throw py::value_error(e.what());
+          }
+        }
+        py::dict columns;
+        for (std::size_t c = 0; c < f.series.columns.size(); ++c) {
+          const SampleColumn& sc = f.series.columns[c];
+          std::vector<double>& v = f.series.values[c];
+          if (sc.field == SampleField::Phase) {
+            std::vector<std::int8_t> phase(v.size());
+            for (std::size_t i = 0; i < v.size(); ++i) phase[i] = static_cast<std::int8_t>(v[i]);
+            columns[py::str(sc.name)] = to_array(std::move(phase));
+          } else {
+            columns[py::str(sc.name)] = to_array(std::move(v));
+          }
+        }
+        const int contacts = build_model(f.spec)->contact_count();
+        py::object summary = py::none();
+        if (!f.summary_json.empty()) summary = py::str(f.summary_json);
+        return py::make_tuple(columns, event_columns_of(f.events, contacts), summary, f.warnings);
+      },
+      py::arg("dir"),
+      "(columns, events, summary_json or None, warnings) of an output folder, read by the C++ "
+      "reader (io/output_reader.hpp): the columns by the model's column table, the events by "
+      "events.csv's; a cut last row is dropped with a warning");
 
   // rubdyn compare: the C++ readers and measures, returned as comparison_json's text and the
   // CLI's report.

@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "rubdyn/driver/simulate.hpp"
 #include "rubdyn/io/case_io.hpp"
-#include "rubdyn/io/simulate.hpp"
 
 int main(int argc, char** argv) {
   if (argc < 2) {

@@ -1,6 +1,4 @@
 """A run's output in numpy: the result of rubdyn.run and of rubdyn.read (an output folder)."""
-import csv
-import io
 import json
 import os
 import warnings
@@ -84,92 +82,23 @@ class Result:
                 f"t_reached {s.get('t_reached')}, {s.get('termination')}>")
 
 
-def _read_timeseries(path):
-    """timeseries.csv -> dict of arrays. A last row cut by a run that died is dropped (warning).
-    numpy's C text parser reads the numbers (the written doubles come back bit for bit: tested
-    against rubdyn.run); the phase words become codes first."""
-    with open(path, newline="") as f:
-        header = f.readline().rstrip("\n").split(",")
-        body = f.read()
-    ncol = len(header)
-    if body and not body.endswith("\n"):
-        warnings.warn(f"{path}: the last row is incomplete (a run that ended abruptly): dropped",
-                      RuntimeWarning, stacklevel=3)
-        body = body[:body.rfind("\n") + 1]
-    if "phase" in header:
-        if header[-1] != "phase":
-            raise ValueError(f"{path}: phase is expected as the last column")
-        for code, word in enumerate(PHASES):
-            body = body.replace(f",{word}\n", f",{code}\n")
-    if not body:
-        return {name: np.zeros(0, dtype=np.int8 if name == "phase" else float) for name in header}
-    nrow = body.count("\n")
-    with warnings.catch_warnings():
-        warnings.simplefilter("error", DeprecationWarning)  # text it cannot read: an error
-        flat = np.fromstring(body.rstrip("\n").replace("\n", ","), dtype=float, sep=",")
-    if flat.size != nrow * ncol:
-        raise ValueError(f"{path}: {flat.size} numbers read, {nrow} rows x {ncol} columns "
-                         "expected (a row with a wrong number of fields or a bad number)")
-    data = flat.reshape(nrow, ncol)
-    cols = {name: np.ascontiguousarray(data[:, j]) for j, name in enumerate(header)}
-    if "phase" in cols:
-        cols["phase"] = cols["phase"].astype(np.int8)
-    return cols
-
-
-def _read_events(path):
-    """events.csv -> structured array (header-only file: an empty array)."""
-    if not os.path.exists(path):
-        return _events_array({}, 0)
-    with open(path, newline="") as f:
-        text = f.read()
-    if text and not text.endswith("\n"):
-        warnings.warn(f"{path}: the last row is incomplete: dropped", RuntimeWarning,
-                      stacklevel=3)
-        text = text[:text.rfind("\n") + 1]
-    reader = csv.reader(io.StringIO(text))
-    header = next(reader, None)
-    rows = [r for r in reader if r]
-    if header is None:
-        return _events_array({}, 0)
-    idx = {name: i for i, name in enumerate(header)}
-    columns = {}
-    for name, kind in EVENT_FIELDS:
-        if name not in idx:
-            columns[name] = [np.nan if kind == "f8" else ""] * len(rows)
-            continue
-        j = idx[name]
-        if kind == "f8":
-            columns[name] = [float(r[j]) if r[j] != "" else np.nan for r in rows]
-        else:
-            columns[name] = [r[j] for r in rows]
-    return _events_array(columns, len(rows))
-
-
 def read(out_dir):
-    """Reads an output folder written by `rubdyn run` (timeseries.csv, events.csv, summary.json;
-    .case from case.resolved.toml, None without it).
+    """Reads an output folder written by `rubdyn run` (timeseries.csv, events.csv, summary.json,
+    case.resolved.toml) through the C++ reader the CLI uses (io/output_reader.hpp), so the columns
+    are the model's column table and the numbers come back bit for bit.
     A run that died keeps its rows: a cut last row is dropped with a warning, a missing
-    summary.json gives summary None (with a warning)."""
+    summary.json gives summary None (with a warning). A folder without timeseries.csv is
+    FileNotFoundError; a malformed file is ValueError naming the file, line and column."""
     out_dir = os.fspath(out_dir)
-    ts = os.path.join(out_dir, "timeseries.csv")
-    if not os.path.exists(ts):
+    if not os.path.exists(os.path.join(out_dir, "timeseries.csv")):
         raise FileNotFoundError(f"{out_dir}: no timeseries.csv (not a rubdyn output folder)")
-    columns = _read_timeseries(ts)
-    events = _read_events(os.path.join(out_dir, "events.csv"))
-    summary = None
-    sj = os.path.join(out_dir, "summary.json")
-    if os.path.exists(sj):
-        with open(sj) as f:
-            summary = json.load(f)
-    else:
+    columns, events, summary_json, notes = _core.read_run(out_dir)
+    for note in notes:
+        warnings.warn(note, RuntimeWarning, stacklevel=2)
+    summary = json.loads(summary_json) if summary_json is not None else None
+    if summary is None:
         warnings.warn(f"{out_dir}: no summary.json (the run did not finish)", RuntimeWarning,
                       stacklevel=2)
-    case = None
-    resolved = os.path.join(out_dir, "case.resolved.toml")
-    if os.path.exists(resolved):
-        try:
-            case = _core.load_case(resolved, [])
-        except _core.CaseError as err:  # written by another version of rubdyn
-            warnings.warn(f"{resolved}: not loaded ({err})", RuntimeWarning, stacklevel=2)
-    return Result(columns, events, summary, case=case, source=out_dir)
+    case = _core.load_case(os.path.join(out_dir, "case.resolved.toml"), [])
+    return Result(dict(columns), _events_array(events, len(events["t"])), summary, case=case,
+                  source=out_dir)

@@ -116,6 +116,68 @@ def test_run_fixed_step_equals_the_cli_bitwise(cli, tmp_path):
         assert same_bits(res[name], folder[name]), name
 
 
+def test_read_a_jeffcott_folder_equals_the_run_bitwise(cli, tmp_path):
+    # the Jeffcott rotor at a prescribed speed: 5 coordinates and the drive_torque column, read
+    # by the C++ reader through the model's column table
+    text = open(REFERENCE.replace("reference.toml", "jeffcott.toml")).read()
+    assert "torque    = 20.0" in text
+    case_file = tmp_path / "jeffcott_prescribed.toml"
+    case_file.write_text(text.replace("torque    = 20.0", 'spin = "prescribed"'))
+    out = tmp_path / "jeffcott"
+    p = run_cli(cli, "run", str(case_file), "--t-end", "0.03", "--out", str(out), "--quiet")
+    assert p.returncode == 0, p.stderr
+    folder = rubdyn.read(out)
+    res = rubdyn.run(str(case_file), t_end=0.03)
+    assert folder.case.kind == "jeffcott" and folder.case["loads.spin"] == "prescribed"
+    assert list(folder.columns) == list(res.columns) == folder.case.columns
+    assert "drive_torque" in folder.columns and "x_b" not in folder.columns
+    for name in res.columns:
+        assert same_bits(res[name], folder[name]), name
+    assert len(folder.events) == len(res.events) > 0
+    for name, kind in rubdyn.EVENT_FIELDS:
+        if kind == "f8":
+            assert same_bits(res.events[name], folder.events[name]), name
+        else:
+            assert list(res.events[name]) == list(folder.events[name]), name
+    for key in res.summary:
+        if key not in IGNORED_SUMMARY_KEYS:
+            assert res.summary[key] == folder.summary[key], key
+
+
+def test_read_a_malformed_folder_names_file_line_and_column(cli_reference_out, tmp_path):
+    bad = tmp_path / "bad"
+    shutil.copytree(cli_reference_out, bad)
+    ts = bad / "timeseries.csv"
+    lines = ts.read_text().split("\n")
+    header = lines[0].split(",")
+    row = lines[3].split(",")
+    row[header.index("omega")] = "fast"
+    lines[3] = ",".join(row)
+    ts.write_text("\n".join(lines))
+    with pytest.raises(ValueError, match=r"timeseries.csv:4: column omega: 'fast' is not a number"):
+        rubdyn.read(bad)
+    with pytest.raises(FileNotFoundError):
+        rubdyn.read(tmp_path / "nothing")
+
+
+def test_case_values_are_the_resolved_keys():
+    ref = rubdyn.load_case(REFERENCE)
+    text = open(REFERENCE.replace("reference.toml", "jeffcott.toml")).read()
+    stator = text[text.index("[stator]"):text.index("gap  = 2.0e-4")]
+    jc = rubdyn.parse_case(text.replace(stator, "[stator]\nrigid = true\n"))
+    assert ref.kind == "rigid-rotor" and jc.kind == "jeffcott"
+    # the keys of case.resolved.toml, with the values it writes
+    for case in (ref, jc):
+        values = case.values()
+        resolved = [line.split(" = ")[0] for line in case.to_toml().splitlines()
+                    if " = " in line and not line.startswith("name")]
+        assert [k.split(".")[1] for k in values] == resolved
+    assert jc["stator.rigid"] is True and "stator.mass" not in jc.values()
+    assert ref["bearing.k"] == 5e6 and jc["rotor.mass"] == 5.0
+    with pytest.raises(KeyError, match="not a key of this jeffcott case"):
+        jc["bearing.k"]
+
+
 def test_progress_is_called_and_its_exception_raised():
     calls = []
     rubdyn.run(REFERENCE, t_end=0.01, progress=lambda *a: calls.append(a), progress_interval=0)

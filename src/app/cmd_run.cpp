@@ -18,13 +18,13 @@
 #include "commands.hpp"
 #include "rubdyn/analysis/postprocess.hpp"
 #include "rubdyn/core/report.hpp"
+#include "rubdyn/driver/simulate.hpp"
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/columns.hpp"
 #include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/io/output_folder.hpp"
-#include "rubdyn/io/simulate.hpp"
-#include "rubdyn/io/solver_registry.hpp"
+#include "rubdyn/io/solver_options.hpp"
 
 namespace rubdyn::app {
 

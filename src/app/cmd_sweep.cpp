@@ -9,9 +9,9 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "rubdyn/analysis/sweep.hpp"
 #include "rubdyn/core/run_types.hpp"
-#include "rubdyn/io/solver_registry.hpp"
+#include "rubdyn/driver/sweep.hpp"
+#include "rubdyn/io/solver_options.hpp"
 
 namespace rubdyn::app {
 

@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "decision_tolerances.hpp"
+
 namespace rubdyn::detail {
 
 namespace {
@@ -133,13 +135,6 @@ void install(N_Vector v) {
 }  // namespace small
 
 }  // namespace
-
-/// Horizon [s] from which CVODE estimates the first step after a restart (see advance): a fixed
-/// time, so that neither the output grid nor the end time changes the steps taken. CVODE
-/// starts its estimate from a tenth of it, and replaces it by the distance to the stop time
-/// when that is shorter: only a phase that starts within 1 ms of the end of the run depends on
-/// the end time. 1 ms is 30x the free-flight steps of the reference case at rtol 1e-10.
-constexpr double kFirstStepHorizon = 1e-3;
 
 struct CvodeSession::Impl {
   int n = 0;

@@ -21,7 +21,7 @@
 #include "event_locator.hpp"
 #include "mode_switching.hpp"
 #include "phase_system.hpp"
-#include "rubdyn/core/run_monitor.hpp"
+#include "rubdyn/core/run_envelope.hpp"
 
 namespace rubdyn {
 
@@ -38,17 +38,12 @@ class Integrator {
         opt_(opt),
         sink_(sink),
         law_(m.contact_law(0)),
-        mon_(law_.mu, opt.omega_lim),
-        g0_(m.gap_scale(0)),
-        atol_v_(opt.atol * 1e3),
-        v_tol_(10.0 * atol_v_),
-        // positions are resolved to about atol + rtol |q| with |q| ~ the gap scale near contact
-        graze_tol_(10.0 * (opt.atol + opt.rtol * g0_)),
-        // A gap minimum within this band of 0 is logged as grazing (and decided by the contact
-        // problem). The band is wider than the local tolerance because the global error of the
-        // orbit is (measured: 1e-8 on a unit amplitude at rtol 1e-10); logging a near-miss
-        // changes nothing in the motion, since at a minimum of free flight d_N'' >= 0.
-        sw_(m, SwitchTolerances{v_tol_, graze_tol_, std::max(graze_tol_, 1e-6 * g0_), g0_}),
+        tol_(SwitchTolerances::derive(opt.rtol, opt.atol, m.gap_scale(0))),
+        g0_(tol_.g0),
+        atol_v_(tol_.atol_v),
+        v_tol_(tol_.v_tol),
+        graze_tol_(tol_.graze_tol),
+        sw_(m, tol_),
         guard_(opt.max_events_per_second),
         sample_(n_, 1, static_cast<int>(m.observables().size())),
         op_(n_),
@@ -62,7 +57,7 @@ class Integrator {
         v_ev_(Vec::Zero(n_)),
         acc_(Vec::Zero(n_)) {
     wit_.g0 = g0_;
-    wit_.v_ref = std::max(1e3 * g0_, 1e-300);
+    wit_.v_ref = tol_.v_ref;
     wit_.omega_lim = opt.omega_lim;
     omega_pending_ = opt.omega_lim > 0.0 && m.spin_coordinate() >= 0;
     if (opt.contact_phases == ContactFormulation::Reduced) chart_ = m.contact_chart();
@@ -148,7 +143,7 @@ class Integrator {
     } else {
       double FN = 0, FT = 0;
       s->forces(t, qs, vs, FN, FT);
-      wit_.F_ref = std::max({wit_.F_ref, std::abs(FN), 1e-6});
+      wit_.F_ref = std::max({wit_.F_ref, std::abs(FN), kForceRefFloor});
     }
     t_restart_ = t;
     cur_ = s;
@@ -177,7 +172,9 @@ class Integrator {
     work_ = cur_->works_at(t);
     end_phase(t);
   }
-  void end_phase(double t) { sum_.phase_time[static_cast<int>(phase_)] += t - phase_start_; }
+  void end_phase(double t) {
+    env_->summary().phase_time[static_cast<int>(phase_)] += t - phase_start_;
+  }
 
   // ---- output ----
   void emit_sample(double t, const Vec& q, const Vec& v) {
@@ -212,29 +209,23 @@ class Integrator {
       const ContactForce F{cs.F_N, cs.F_T};
       m_.compute_observables(t, s.q, s.v, acc_, &F, s.observables);
     }
-    mon_.observe(t, m_.spin(t, s.q, s.v), cs.d_N, cs.v_N, cs.F_N, cs.F_T, phase_ != Phase::Free);
-    sink_.sample(s);
+    env_->sample(s, m_.spin(t, s.q, s.v), phase_ != Phase::Free);
   }
 
   /// Writes the output times before t, interpolated in the last step, before an event at t
   /// restarts the integration there: the step that found a root may have passed output times
   /// before it (single-step mode while the gap-rate witness is armed).
   void emit_outputs_before(double t) {
-    while (next_out_ < t && next_out_ < t_end_) {
-      cur_->interpolate(next_out_, q_tmp_, v_tmp_);
-      emit_sample(next_out_, q_tmp_, v_tmp_);
-      next_out_ = t_init_ + static_cast<double>(++k_out_) * opt_.output_dt;
+    while (env_->next_output() < t && env_->next_output() < t_end_) {
+      const double tout = env_->next_output();
+      cur_->interpolate(tout, q_tmp_, v_tmp_);
+      emit_sample(tout, q_tmp_, v_tmp_);
+      env_->advance_output();
     }
   }
 
-  void fail(Termination why, const std::string& msg) {
-    sum_.termination = why;
-    sum_.message = msg;
-  }
-  void log_event(const EventRecord& e) {
-    ++sum_.events[static_cast<int>(e.kind)];
-    sink_.event(e);
-  }
+  void fail(Termination why, const std::string& msg) { env_->fail(why, msg); }
+  void log_event(const EventRecord& e) { env_->event(e); }
 
   // ---- events (false: the run ends) ----
   /// Logs a transition's events and restarts where it says.
@@ -312,11 +303,11 @@ class Integrator {
   }
 
   bool on_gap_minimum(double t, const Vec& q, const Vec& v, bool& restarted) {
-    if (t - phase_start_ <= 1e-12 * std::max(1.0, std::abs(t))) {
+    if (t - phase_start_ <= kPhaseStartRel * std::max(1.0, std::abs(t))) {
       // Half-open interval rule: right after a release on the constraint (v_N = 0, and the
       // free normal acceleration ~ 0 at a lift-off) the gap rate may dip by round-off and come
       // back: that is the phase's own start, not a new gap minimum. Counted.
-      ++sum_.suppressed_witnesses;
+      ++env_->summary().suppressed_witnesses;
       return true;
     }
     switch (sw_.classify_gap_minimum(t, q, v)) {
@@ -328,7 +319,8 @@ class Integrator {
         restarted = true;
         close_phase(t);
         emit_sample(t, q, v);
-        return apply(t, sw_.on_constraint(t, q, v, sw_.grazing_record(t, q, v, false), 1e-9));
+        return apply(
+            t, sw_.on_constraint(t, q, v, sw_.grazing_record(t, q, v, false), kDecisionBandRel));
       case ModeSwitcher::GapMinimum::Crossed: {
         // the gap closed and reopened inside the step: back to its first crossing
         restarted = true;
@@ -354,17 +346,18 @@ class Integrator {
     e.v_N_minus = c.v_N;
     e.v_t_minus = c.v_t;
     e.witness = witness_name(w);  // the kind follows from the decision (on_constraint)
-    // Decided with a band of 1e-7 relative: the witness is zero at the event to the accuracy
-    // of the root location on the interpolant, so a margin of that size is a zero, not a sign.
-    // The phase whose witness fired cannot continue (tie rule 1 of coulomb_signorini.hpp).
-    return apply(t,
-                 sw_.on_constraint(t, q, v, e, 1e-7, w == Witness::SlipSpeed, phase_, wit_.F_ref));
+    // Decided with the witness band (kWitnessBandRel): the witness is zero at the event to the
+    // accuracy of the root location on the interpolant, so a margin of that size is a zero, not
+    // a sign. The phase whose witness fired cannot continue (tie rule 1 of
+    // coulomb_signorini.hpp).
+    return apply(t, sw_.on_constraint(t, q, v, e, kWitnessBandRel, w == Witness::SlipSpeed, phase_,
+                                      wit_.F_ref));
   }
 
   /// One fired witness at t (the root finder's time, state (q, v)).
   bool on_root(Witness w, double t, const Vec& q, const Vec& v, bool& restarted) {
     if (w == Witness::Omega) {
-      mon_.set_omega_lim_time(t);
+      env_->monitor().set_omega_lim_time(t);
       omega_pending_ = false;
       return true;
     }
@@ -401,7 +394,7 @@ class Integrator {
     e.t = t;
     e.kind = EventKind::Contact;
     e.witness = "initial state on the constraint";
-    return apply(t, sw_.on_constraint(t, q, v, e, 1e-9));
+    return apply(t, sw_.on_constraint(t, q, v, e, kDecisionBandRel));
   }
 
   const LagrangianModel& m_;
@@ -409,8 +402,8 @@ class Integrator {
   const EventDrivenOptions& opt_;
   OutputSink& sink_;
   const ContactLaw law_;
-  RunMonitor mon_;
-  RunSummary sum_;
+  std::optional<RunEnvelope> env_;  // the books of the run (core/run_envelope.hpp)
+  const SwitchTolerances tol_;      // decision_tolerances.hpp
   const double g0_, atol_v_, v_tol_, graze_tol_;
   ModeSwitcher sw_;
   EventGuard guard_;
@@ -429,33 +422,27 @@ class Integrator {
   ContactOperators op_;
   PhaseDynamics dyn_;
   ContactKinematics kin_;
-  Vec q_restart_, v_restart_;         // where the current phase (re)started
-  Vec q_tmp_, v_tmp_;                 // interpolated states (outputs, the localisers)
-  Vec q_ev_, v_ev_;                   // the state at an event
-  Vec acc_;                           // the accelerations at a sample (the observables)
-  double t_init_ = 0, next_out_ = 0;  // output grid t_init_ + k output_dt, next time to write
-  long k_out_ = 1;
+  Vec q_restart_, v_restart_;  // where the current phase (re)started
+  Vec q_tmp_, v_tmp_;          // interpolated states (outputs, the localisers)
+  Vec q_ev_, v_ev_;            // the state at an event
+  Vec acc_;                    // the accelerations at a sample (the observables)
   Works work_{};
   double work_impacts_ = 0.0;
 };
 
 RunSummary Integrator::run(const MechanicalState& init, double t_end) {
-  const auto wall0 = std::chrono::steady_clock::now();
   t_end_ = t_end;
-  sum_.solver = "event";
-  sum_.options = fmt::format(
-      "{{\"rtol\": {:.3g}, \"atol\": {:.3g}, \"free_flight\": \"{}\", \"contact_phases\": "
-      "\"{}\", \"adams_iteration\": \"{}\", \"output_dt\": {:.6g}}}",
-      opt_.rtol, opt_.atol, opt_.adams ? "adams" : "bdf",
-      chart_ ? (opt_.contact_adams ? "reduced+adams" : "reduced+bdf") : "bdf+projection",
-      opt_.fixed_point ? "fixed-point" : "newton", opt_.output_dt);
-  sum_.t_start = init.t;
-  sum_.t_end_requested = t_end;
-  sum_.energy_initial = m_.mechanical_energy(init.t, init.q, init.v);
+  env_.emplace(m_, opt_, sink_, init, t_end, "event",
+               fmt::format("{{\"rtol\": {:.3g}, \"atol\": {:.3g}, \"free_flight\": \"{}\", "
+                           "\"contact_phases\": \"{}\", \"adams_iteration\": \"{}\", "
+                           "\"output_dt\": {:.6g}}}",
+                           opt_.rtol, opt_.atol, opt_.adams ? "adams" : "bdf",
+                           chart_ ? (opt_.contact_adams ? "reduced+adams" : "reduced+bdf")
+                                  : "bdf+projection",
+                           opt_.fixed_point ? "fixed-point" : "newton", opt_.output_dt));
+  RunSummary& sum = env_->summary();
   double t = init.t;
   Vec q = init.q, v = init.v;
-  t_init_ = init.t;
-  next_out_ = init.t + opt_.output_dt;
   bool ok = true;
   // A root that needed no restart, kept for recovery: CVODE stops when a witness is zero both
   // at the last root and just after it ("root found at and very near"), which a degenerate
@@ -477,19 +464,19 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
     }
     while (ok && t < t_end_) {
       // advance (per-phase cost: steps and wall time of the integration itself)
-      const double tout = std::min(next_out_, t_end_);
+      const double tout = std::min(env_->next_output(), t_end_);
       const bool arming = gap_rate_deferred_ || gap_banded_;
       const int ph = static_cast<int>(phase_);
       const long steps0 = cur_->session().steps_since_restart();
       const auto wall_adv = std::chrono::steady_clock::now();
       const Status st = cur_->advance(tout, t, q, v, arming);
-      sum_.phase_wall[ph] +=
+      sum.phase_wall[ph] +=
           std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_adv).count();
-      sum_.phase_steps[ph] += cur_->session().steps_since_restart() - steps0;
+      sum.phase_steps[ph] += cur_->session().steps_since_restart() - steps0;
       // classify
       if (st == Status::Failure && root_without_restart && recoveries < 100) {
         ++recoveries;
-        ++sum_.suppressed_witnesses;
+        ++sum.suppressed_witnesses;
         root_without_restart = false;
         end_phase(t_root);
         work_ = work_root;
@@ -515,25 +502,10 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
       if (st == Status::Step) continue;
       if (st == Status::Reached) {
         emit_sample(t, q, v);
-        if (opt_.progress)
-          opt_.progress(t, std::accumulate(sum_.events.begin(), sum_.events.end(), 0L),
-                        m_.spin(t, q, v), phase_);
-        if (opt_.stop && t < t_end_ && opt_.stop->load(std::memory_order_relaxed)) {
-          fail(Termination::Interrupted, fmt::format("interrupted at t = {:.17g}", t));
-          break;
-        }
-        if (opt_.max_wall > 0.0 && t < t_end_) {
-          const double spent =
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-          if (spent > opt_.max_wall) {
-            fail(Termination::TimeBudget,
-                 fmt::format("wall-time budget of {} s spent ({:.3g} s) at t = {:.17g}",
-                             opt_.max_wall, spent, t));
-            break;
-          }
-        }
-        if (t >= tout && tout == next_out_)
-          next_out_ = t_init_ + static_cast<double>(++k_out_) * opt_.output_dt;
+        env_->progress(t, m_.spin(t, q, v), phase_);
+        // (not at the end: a run that reached t_end is complete)
+        if (t < t_end_ && (env_->stop_requested(t) || env_->budget_spent(t))) break;
+        if (t >= tout && tout == env_->next_output()) env_->advance_output();
         continue;
       }
       // dispatch the roots. In single-step mode (arming the gap-rate witness) the step that
@@ -572,28 +544,18 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
 
   // Close the books.
   end_phase(t);
-  sum_.t_reached = t;
   if (cur_) work_ = cur_->works();
-  sum_.energy_final = m_.mechanical_energy(t, q, v);
-  sum_.work_torque = work_[0];
-  sum_.work_damping = work_[1];
-  sum_.work_friction = work_[2];
-  sum_.work_impacts = work_impacts_;
-  sum_.close_energy_balance();
-  mon_.fill(sum_);
   for (const auto* s : {free_.get(), contact_.get(), slip_.get(), stick_.get()}) {
     if (!s) continue;
     const auto st = s->session().stats();
-    sum_.steps += st.steps;
-    sum_.rhs_evals += st.rhs_evals;
-    sum_.jac_evals += st.jac_evals;
-    sum_.root_evals += st.root_evals;
-    sum_.newton_iters += st.newton_iters;
+    sum.steps += st.steps;
+    sum.rhs_evals += st.rhs_evals;
+    sum.jac_evals += st.jac_evals;
+    sum.root_evals += st.root_evals;
+    sum.newton_iters += st.newton_iters;
   }
-  sum_.wall_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  sink_.end(sum_);
-  return sum_;
+  return env_->finish(t, m_.mechanical_energy(t, q, v),
+                      {work_[0], work_[1], work_[2], work_impacts_});
 }
 
 }  // namespace

@@ -11,7 +11,7 @@ ModeSwitcher::ModeSwitcher(const LagrangianModel& m, const SwitchTolerances& tol
 
 void ModeSwitcher::project_position(double t, VecOut q, VecIn v) const {
   ContactKinematics c(m_.num_dofs());
-  rubdyn::project_position(m_, t, q, v, 1e-14 * tol_.g0, c);
+  rubdyn::project_position(m_, t, q, v, kProjectionRel * tol_.g0, c);
 }
 
 Transition ModeSwitcher::gap_closed(double t, VecIn q, VecIn v_minus, EventRecord e) const {
@@ -23,7 +23,7 @@ Transition ModeSwitcher::gap_closed(double t, VecIn q, VecIn v_minus, EventRecor
   if (op.c.v_N >= -tol_.v_tol) {
     e.kind = EventKind::Contact;  // arrival with v_N ~ 0: no impact
     e.note = "arrival with |v_N| below the velocity tolerance";
-    return on_constraint(t, q, v_minus, e, 1e-9);
+    return on_constraint(t, q, v_minus, e, kDecisionBandRel);
   }
   e.kind = EventKind::Impact;
   const ImpactResult r = impact_map(op, v_minus, law_);
@@ -82,7 +82,7 @@ Transition ModeSwitcher::gap_closed(double t, VecIn q, VecIn v_minus, EventRecor
         "accumulation time {:.17g} s (truncated {:.3g} s)",
         height, t_inf, t_inf - t);
   }
-  Transition tr = on_constraint(t, q, v_plus, e, 1e-9);
+  Transition tr = on_constraint(t, q, v_plus, e, kDecisionBandRel);
   tr.impulse_work += m_.kinetic_energy(t, q, v_plus) - T_minus;
   return tr;
 }
@@ -163,9 +163,10 @@ EventRecord ModeSwitcher::grazing_record(double t, VecIn q, VecIn v, bool touch_
 }
 
 std::optional<std::string> EventGuard::record(double t) {
-  if (std::abs(t - last_t_) <= 1e-14 * std::max(1.0, std::abs(t))) {
-    if (++same_time_ > 20)
-      return fmt::format("more than 20 events at t = {:.17g}: mode switching loops", t);
+  if (std::abs(t - last_t_) <= kSameInstantRel * std::max(1.0, std::abs(t))) {
+    if (++same_time_ > kMaxSameInstant)
+      return fmt::format("more than {} events at t = {:.17g}: mode switching loops",
+                         kMaxSameInstant, t);
   } else {
     same_time_ = 0;
   }

@@ -14,16 +14,10 @@
 #include <optional>
 #include <string>
 
+#include "decision_tolerances.hpp"
 #include "rubdyn/hybrid/contact_problem.hpp"
 
 namespace rubdyn::detail {
-
-struct SwitchTolerances {
-  double v_tol = 0;       ///< velocity below which a closing contact is an arrival, not an impact
-  double graze_tol = 0;   ///< position resolution of the integrator (bounce heights, grazing)
-  double graze_band = 0;  ///< a gap minimum within this band of 0 is logged as grazing
-  double g0 = 1;          ///< the gap's scale (position projections stop at 1e-14 g0)
-};
 
 /// The outcome of an event: what to log and where the run continues.
 struct Transition {
@@ -76,8 +70,9 @@ class ModeSwitcher {
   const SwitchTolerances tol_;
 };
 
-/// Bounds on events: more than 20 at one instant (mode switching that loops) or more than
-/// max_per_second per unit of simulated time over the last 64 (chattering) end the run.
+/// Bounds on events: more than kMaxSameInstant at one instant (mode switching that loops) or
+/// more than max_per_second per unit of simulated time over the last kChatterWindow
+/// (chattering) end the run (decision_tolerances.hpp).
 class EventGuard {
  public:
   explicit EventGuard(double max_per_second) : max_per_second_(max_per_second) {}
@@ -86,7 +81,7 @@ class EventGuard {
 
  private:
   double max_per_second_;
-  std::array<double, 64> times_{};
+  std::array<double, kChatterWindow> times_{};
   long n_ = 0;
   int same_time_ = 0;
   double last_t_ = -1e300;

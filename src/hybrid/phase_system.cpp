@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "decision_tolerances.hpp"
+
 namespace rubdyn::detail {
 
 const char* witness_name(Witness w) {
@@ -263,7 +265,7 @@ ProjectedContact::ProjectedContact(const LagrangianModel& m, const WitnessSet& w
 /// mass-weighted onto v_N = 0, and v_t = 0 in stick) and returns the contact operators at the
 /// projected state: one structured solve with M(q) for three right-hand sides, then one.
 void ProjectedContact::contact_point(double t, Vec& q, Vec& v, ContactOperators& op) const {
-  project_position(m_, t, q, v, 1e-14 * g0_, op.c);
+  project_position(m_, t, q, v, kProjectionRel * g0_, op.c);
   compute_contact_operators(m_, t, q, v, op);
   project_velocity(op, phase_ == Phase::Stick ? 2 : 1, v);
   update_contact_velocity(m_, t, q, v, op);

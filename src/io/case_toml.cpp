@@ -19,7 +19,7 @@
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/model_registry.hpp"
-#include "rubdyn/io/solver_registry.hpp"
+#include "rubdyn/io/solver_options.hpp"
 #include "rubdyn/io/text_files.hpp"
 #include "rubdyn/stepping/fixed_step.hpp"
 
@@ -777,53 +777,11 @@ class Loader {
       issue("solver.projection", at("solver.projection"), "\"" + so.projection + "\"",
             "must be mass or identity");
     }
-    // The event-driven options: the rules are stated once, in hybrid/event_driven.cpp.
-    {
-      EventDrivenOptions eo;
-      eo.rtol = so.rtol;
-      eo.atol = so.atol;
-      eo.max_events_per_second = so.max_events_per_second;
-      eo.output_dt = c.output.dt;
-      static const std::map<std::string, std::string> key_of = {
-          {"rtol", "solver.rtol"},
-          {"atol", "solver.atol"},
-          {"max_events_per_second", "solver.max_events_per_second"}};
-      for (const auto& p : event_driven_option_problems(eo)) {
-        if (!key_of.count(p.option)) continue;  // output_dt: the fixed-step rules report it
-        const std::string& key = key_of.at(p.option);
-        const toml::node* n = at(key);
-        issue(key, n, n ? node_text(*n) : p.value + " (default)", p.rule);
-      }
-    }
-    // The fixed-step options: the rules are stated once, in stepping/fixed_step.cpp. The step
-    // count rules (a whole number of steps, at most kMaxFixedSteps) apply to fixed-step runs.
-    {
-      FixedStepOptions fo;
-      fo.h = so.h;
-      fo.itmax = so.itmax;
-      fo.qn_tol = so.qn_tol;
-      fo.theta = so.theta;
-      fo.eta = so.eta;
-      fo.output_every = c.output.every;
-      fo.output_dt = c.output.dt;
-      fo.max_wall = c.run.max_wall;  // (the event-driven check states the same rule: not mapped)
-      auto bad = fixed_step_option_problems(fo);
-      if (fixed_step) {
-        for (auto& p : fixed_step_count_problems(fo.h, c.run.t_start, c.run.t_end))
-          bad.push_back(p);
-      }
-      static const std::map<std::string, std::string> key_of = {
-          {"h", "solver.h"},           {"itmax", "solver.itmax"},
-          {"qn_tol", "solver.qn_tol"}, {"theta", "solver.theta"},
-          {"eta", "solver.eta"},       {"t_end", "run.t_end"},
-          {"output_dt", "output.dt"},  {"output_every", "output.every"},
-          {"max_wall", "run.max_wall"}};
-      for (const auto& p : bad) {
-        const std::string& key = key_of.at(p.option);
-        if (key == "run.t_end" && !(c.run.t_end > c.run.t_start)) continue;  // reported above
-        const toml::node* n = at(key);
-        issue(key, n, n ? node_text(*n) : p.value + " (default)", p.rule);
-      }
+    // The solvers' options, through the one mapping from a case to them
+    // (io/solver_options.hpp, which the run uses too): each family states its own rules.
+    for (const KeyProblem& p : solver_option_problems(c)) {
+      const toml::node* n = at(p.key);
+      issue(p.key, n, n ? node_text(*n) : p.value + " (default)", p.rule);
     }
     // Output size: at most kMaxOutputRows rows (output.dt = 1e-300 once wrote 117 MB in 5 s on
     // its way to 1e297 rows; t_end = 1e300 is the same mistake).
@@ -886,33 +844,47 @@ std::string toml_quote(std::string_view text) {
   return quoted_string(text);
 }
 
+std::vector<CaseEntry> case_values(const CaseSpec& c) {
+  std::vector<CaseEntry> out;
+  CaseSpec copy = c;  // schema accessors take a mutable CaseSpec
+  for (const auto& ks : schema(c)) {
+    if (ks.refused && !ks.refused(c).empty()) continue;  // not a key of this case
+    CaseEntry e{ks.section, ks.key, {}};
+    switch (ks.kind) {
+      case Kind::Number: e.value = *ks.num(copy); break;
+      case Kind::Integer: e.value = *ks.integer(copy); break;
+      case Kind::String: e.value = *ks.text(copy); break;
+      case Kind::Bool: e.value = *ks.flag(copy); break;
+      case Kind::Choice: e.value = ks.get(c); break;
+    }
+    out.push_back(std::move(e));
+  }
+  return out;
+}
+
 std::string to_toml(const CaseSpec& c) {
   std::string out = fmt::format("# resolved case: every key with its value (rubdyn)\nname = {}\n",
                                 toml_quote(c.name));
-  CaseSpec copy = c;  // schema accessors take a mutable CaseSpec
   std::string section;
-  for (const auto& ks : schema(c)) {
-    if (ks.refused && !ks.refused(c).empty()) continue;  // not a key of this case
-    if (section != ks.section) {
-      section = ks.section;
+  for (const CaseEntry& e : case_values(c)) {
+    if (section != e.section) {
+      section = e.section;
       out += fmt::format("\n[{}]\n", section);
     }
-    switch (ks.kind) {
-      case Kind::Number: {
-        // shortest round-trip digits, always as a TOML float: "-0" would read back as the
-        // integer 0 and lose the sign of -0.0 (found by tests/fuzz)
-        std::string v = fmt::format("{}", *ks.num(copy));
-        if (v.find_first_of(".eEn") == std::string::npos) v += ".0";
-        out += fmt::format("{} = {}\n", ks.key, v);
-        break;
-      }
-      case Kind::Integer: out += fmt::format("{} = {}\n", ks.key, *ks.integer(copy)); break;
-      case Kind::String: out += fmt::format("{} = {}\n", ks.key, toml_quote(*ks.text(copy))); break;
-      case Kind::Bool:
-        out += fmt::format("{} = {}\n", ks.key, *ks.flag(copy) ? "true" : "false");
-        break;
-      case Kind::Choice: out += fmt::format("{} = {}\n", ks.key, toml_quote(ks.get(c))); break;
+    std::string v;
+    if (const double* x = std::get_if<double>(&e.value)) {
+      // shortest round-trip digits, always as a TOML float: "-0" would read back as the
+      // integer 0 and lose the sign of -0.0 (found by tests/fuzz)
+      v = fmt::format("{}", *x);
+      if (v.find_first_of(".eEn") == std::string::npos) v += ".0";
+    } else if (const int* i = std::get_if<int>(&e.value)) {
+      v = fmt::format("{}", *i);
+    } else if (const bool* f = std::get_if<bool>(&e.value)) {
+      v = *f ? "true" : "false";
+    } else {
+      v = toml_quote(std::get<std::string>(e.value));
     }
+    out += fmt::format("{} = {}\n", e.key, v);
   }
   return out;
 }

@@ -6,13 +6,10 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
-#include <numeric>
 #include <stdexcept>
 
 #include "rubdyn/core/demand.hpp"
-#include "rubdyn/core/run_monitor.hpp"
 #include "rubdyn/stepping/stepper.hpp"
 
 namespace rubdyn {
@@ -69,11 +66,10 @@ namespace {
 
 class RunLoop {
  public:
-  RunLoop(const LagrangianModel& m, const FixedStepOptions& o, OutputSink& sink)
+  RunLoop(const LagrangianModel& m, const FixedStepOptions& o, RunEnvelope& env)
       : m_(m),
         o_(o),
-        sink_(sink),
-        mon_(m.contact_law(0).mu, o.omega_lim),
+        env_(env),
         kin_(m.num_dofs()),
         sample_(m.num_dofs(), 1, static_cast<int>(m.observables().size())) {}
 
@@ -85,14 +81,10 @@ class RunLoop {
 
   const LagrangianModel& m_;
   const FixedStepOptions& o_;
-  OutputSink& sink_;
-  RunMonitor mon_;
-  RunSummary sum_;
+  RunEnvelope& env_;
   ContactKinematics kin_;
   Sample sample_;
   Phase prev_phase_ = Phase::Free;
-  long next_sample_ = 0;
-  double next_t_out_ = 0;
 };
 
 void RunLoop::record(const StepReport& r, double t) {
@@ -100,8 +92,8 @@ void RunLoop::record(const StepReport& r, double t) {
   const ContactKinematics& c = kin_;
   const bool in_contact = r.phase != Phase::Free;
   const double omega = m_.spin(t, r.q, r.v);
-  mon_.observe(t, omega, c.d_N, c.v_N, r.F_N, r.F_T, in_contact);
-  sum_.phase_time[static_cast<int>(r.phase)] += r.index > 0 ? o_.h : 0.0;
+  env_.monitor().observe(t, omega, c.d_N, c.v_N, r.F_N, r.F_T, in_contact);
+  env_.summary().phase_time[static_cast<int>(r.phase)] += r.index > 0 ? o_.h : 0.0;
   if (r.index > 0 && r.phase != prev_phase_) {
     EventRecord e;
     e.t = t;
@@ -127,18 +119,16 @@ void RunLoop::record(const StepReport& r, double t) {
     } else {
       e.kind = EventKind::Reversal;
     }
-    ++sum_.events[static_cast<int>(e.kind)];
-    sink_.event(e);
+    env_.event(e);
   }
   prev_phase_ = r.phase;
   // output: every N-th step, or the first step end at or after each point of the output grid
   bool out = false;
   if (o_.output_every > 0) {
     out = r.index % o_.output_every == 0;
-  } else if (t >= next_t_out_ - 1e-9 * o_.h) {
+  } else if (t >= env_.next_output() - 1e-9 * o_.h) {
     out = true;
-    while (next_t_out_ <= t + 1e-9 * o_.h)
-      next_t_out_ = sum_.t_start + static_cast<double>(++next_sample_) * o_.output_dt;
+    while (env_.next_output() <= t + 1e-9 * o_.h) env_.advance_output();
   }
   if (out) {
     Sample& s = sample_;
@@ -156,22 +146,14 @@ void RunLoop::record(const StepReport& r, double t) {
       const ContactForce F{r.F_N, r.F_T};
       m_.compute_observables(t, r.q, r.v, r.a, &F, s.observables);
     }
-    sink_.sample(s);
-    if (o_.progress)
-      o_.progress(t, std::accumulate(sum_.events.begin(), sum_.events.end(), 0L), omega, r.phase);
+    env_.output(s);
+    env_.progress(t, omega, r.phase);
   }
 }
 
 RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_end) {
-  const auto wall0 = std::chrono::steady_clock::now();
   const double h = o_.h;
-  sum_.solver = std::string(stepper.name());
-  sum_.options = stepper.options_json();
-  sum_.t_start = init.t;
-  sum_.t_end_requested = t_end;
-  sum_.t_reached = init.t;
-  next_t_out_ = init.t;
-  sum_.energy_initial = m_.mechanical_energy(init.t, init.q, init.v);
+  RunSummary& sum = env_.summary();
   const long n_steps = std::max(1L, std::lround((t_end - init.t) / h));
   RUBDYN_DEMAND(h > 0.0 && n_steps <= kMaxFixedSteps);  // run_fixed_step checked the options
   stepper.start(init.t, init.q, init.v);
@@ -207,38 +189,24 @@ RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_
   for (long i = 0; last->index < n_steps || i == 0; ++i) {
     StepReport& r = last == &reports[0] ? reports[1] : reports[0];
     const double t = init.t + static_cast<double>(i) * h;
-    if (o_.stop && o_.stop->load(std::memory_order_relaxed)) {
-      sum_.termination = Termination::Interrupted;
-      sum_.message = fmt::format("interrupted at t = {:.17g}", t);
-      break;
-    }
+    if (env_.stop_requested(t)) break;
     // the clock every 1024 steps: about 20 ns a read against about 0.3 us a step
-    if (o_.max_wall > 0.0 && i % 1024 == 1023) {
-      const double spent =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-      if (spent > o_.max_wall) {
-        sum_.termination = Termination::TimeBudget;
-        sum_.message = fmt::format("wall-time budget of {} s spent ({:.3g} s) at t = {:.17g}",
-                                   o_.max_wall, spent, t);
-        break;
-      }
-    }
+    if (i % 1024 == 1023 && env_.budget_spent(t)) break;
     const StepOutcome outcome = stepper.step(t, r, message);
     if (outcome != StepOutcome::Ok) {
-      sum_.termination = outcome == StepOutcome::Painleve    ? Termination::Painleve
-                         : outcome == StepOutcome::NonFinite ? Termination::NonFinite
-                                                             : Termination::SolverFailure;
-      sum_.message = message;
+      env_.fail(outcome == StepOutcome::Painleve    ? Termination::Painleve
+                : outcome == StepOutcome::NonFinite ? Termination::NonFinite
+                                                    : Termination::SolverFailure,
+                message);
       break;
     }
-    ++sum_.steps;
-    sum_.newton_iters += r.newton_iters;
+    ++sum.steps;
+    sum.newton_iters += r.newton_iters;
     unconverged += r.unconverged;
     nonunique += r.nonunique;
     const double tr = init.t + static_cast<double>(r.index) * h;
     if (!r.q.allFinite() || !r.v.allFinite()) {
-      sum_.termination = Termination::NonFinite;
-      sum_.message = fmt::format("non-finite state at t = {:.17g}", tr);
+      env_.fail(Termination::NonFinite, fmt::format("non-finite state at t = {:.17g}", tr));
       break;
     }
     SmoothPower p = m_.smooth_power(tr, r.q, r.v);
@@ -249,28 +217,19 @@ RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_
     p_prev = p;
     t_prev = tr;
     last = &r;
-    sum_.t_reached = tr;
+    sum.t_reached = tr;
     record(r, tr);
   }
-  sum_.energy_final = m_.mechanical_energy(sum_.t_reached, last->q, last->v);
-  sum_.work_torque = work_ext;
-  sum_.work_damping = work_damp;
-  // contact work: friction and normal impulses together (the split is not defined for impulses
-  // of a time-stepping scheme); it is written as friction work, impacts 0
-  sum_.work_friction = work_contact;
-  sum_.work_impacts = 0.0;
-  sum_.close_energy_balance();
-  mon_.fill(sum_);
-  if (unconverged > 0 && sum_.message.empty())
-    sum_.message = fmt::format("carp-qn: {} steps reached itmax = {}", unconverged, o_.itmax);
-  if (nonunique > 0 && sum_.message.empty())
-    sum_.message = fmt::format(
+  if (unconverged > 0 && sum.message.empty())
+    sum.message = fmt::format("carp-qn: {} steps reached itmax = {}", unconverged, o_.itmax);
+  if (nonunique > 0 && sum.message.empty())
+    sum.message = fmt::format(
         "{} steps had several consistent contact solutions (tie rule of the local solver)",
         nonunique);
-  sum_.wall_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  sink_.end(sum_);
-  return sum_;
+  // contact work: friction and normal impulses together (the split is not defined for impulses
+  // of a time-stepping scheme); it is written as friction work, impacts 0
+  return env_.finish(sum.t_reached, m_.mechanical_energy(sum.t_reached, last->q, last->v),
+                     RunWorks{work_ext, work_damp, work_contact, 0.0});
 }
 
 }  // namespace
@@ -334,7 +293,10 @@ RunSummary run_fixed_step(const LagrangianModel& model, const MechanicalState& i
   const long n_steps = std::max(1L, std::lround((t_end - initial.t) / opt.h));
   o.h = (t_end - initial.t) / static_cast<double>(n_steps);
   const std::unique_ptr<Stepper> stepper = make_stepper(model, o);
-  RunLoop loop(model, o, sink);
+  // the first step end at or after each grid time, the initial time included: first_output 0
+  RunEnvelope env(model, o, sink, initial, t_end, std::string(stepper->name()),
+                  stepper->options_json(), 0);
+  RunLoop loop(model, o, env);
   return loop.run(*stepper, initial, t_end);
 }
 

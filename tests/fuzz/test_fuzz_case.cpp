@@ -23,7 +23,7 @@
 #include <string>
 #include <vector>
 
-#include "rubdyn/analysis/sweep.hpp"
+#include "rubdyn/driver/sweep.hpp"
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
 

@@ -20,7 +20,7 @@
 
 #include "rubdyn/analysis/compare.hpp"
 #include "rubdyn/analysis/postprocess.hpp"
-#include "rubdyn/analysis/sweep.hpp"
+#include "rubdyn/driver/sweep.hpp"
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/model/rotor_stator_model.hpp"

@@ -1,9 +1,16 @@
 // The one reader of rubdyn's CSV output (io/output_reader.hpp): what a killed run leaves is
 // tolerated with a warning, anything else malformed names the file and the line.
 #include <catch2/catch.hpp>
+#include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
+#include "rubdyn/driver/simulate.hpp"
+#include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/model_registry.hpp"
+#include "rubdyn/io/output_folder.hpp"
 #include "rubdyn/io/output_reader.hpp"
 
 using namespace rubdyn;
@@ -45,4 +52,125 @@ TEST_CASE("read_csv: a wrong field count names the line, and an empty file", "[i
   CHECK(e.rows.empty());
   CHECK(e.warnings.size() == 1);
   CHECK_THROWS_WITH(read_csv(empty + ".none"), Catch::Contains("cannot read"));
+}
+
+namespace {
+
+/// Hands a run's output to two sinks: the folder writer and memory.
+class Tee final : public OutputSink {
+ public:
+  Tee(OutputSink& a, OutputSink& b) : a_(a), b_(b) {}
+  void sample(const Sample& s) override {
+    a_.sample(s);
+    b_.sample(s);
+  }
+  void event(const EventRecord& e) override {
+    a_.event(e);
+    b_.event(e);
+  }
+  void end(const RunSummary& s) override {
+    a_.end(s);
+    b_.end(s);
+  }
+
+ private:
+  OutputSink &a_, &b_;
+};
+
+bool same_bits(double a, double b) {
+  return std::memcmp(&a, &b, sizeof a) == 0 || (std::isnan(a) && std::isnan(b));
+}
+
+}  // namespace
+
+TEST_CASE("read_run_files: what a run wrote comes back bit for bit, by the model's column table",
+          "[io][unit]") {
+  // the paper's rotor (event solver: impacts, slip, lift-offs, witnesses with commas in their
+  // text) and the Jeffcott rotor at prescribed speed (5 coordinates, the drive_torque column)
+  const std::string src = RUBDYN_SOURCE_DIR;
+  auto text_of = [](const std::string& path) {
+    std::ifstream in(path);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  };
+  std::string jeffcott = text_of(src + "/cases/jeffcott.toml");
+  const std::string torque = "torque    = 20.0";
+  REQUIRE(jeffcott.find(torque) != std::string::npos);
+  jeffcott.replace(jeffcott.find(torque), torque.size(), "spin = \"prescribed\"");
+  const std::vector<std::pair<CaseSpec, std::string>> runs = {
+      {load_case(src + "/cases/reference.toml", {"run.t_end=0.05"}), "reference, event"},
+      {parse_case(jeffcott, "jeffcott.toml", {"run.t_end=0.05"}), "jeffcott, prescribed"},
+      {load_case(src + "/cases/reference.toml",
+                 {"run.t_end=0.02", "solver.kind=\"mj\"", "solver.h=1e-5"}),
+       "reference, mj"}};
+  for (const auto& [spec, what] : runs) {
+    const auto dir = std::filesystem::temp_directory_path() / "rubdyn_read_run_files";
+    std::filesystem::remove_all(dir);
+    MemorySink mem;
+    {
+      OutputFolder folder(dir.string(), spec);
+      Tee tee(folder, mem);
+      simulate(spec, tee);
+    }
+    INFO(what);
+    const RunFiles f = read_run_files(dir.string());
+    CHECK(f.complete);
+    CHECK(f.warnings.empty());
+    CHECK(f.spec.model == spec.model);
+    REQUIRE(f.series.rows() == mem.samples.size());
+    REQUIRE(f.series.columns.size() == f.series.values.size());
+    const auto model = build_model(spec);
+    CHECK(f.series.columns.size() == timeseries_columns(*model).size());
+    long differ = 0;
+    for (std::size_t c = 0; c < f.series.columns.size(); ++c)
+      for (std::size_t i = 0; i < mem.samples.size(); ++i)
+        differ +=
+            !same_bits(f.series.values[c][i], sample_value(mem.samples[i], f.series.columns[c]));
+    CHECK(differ == 0);
+    REQUIRE(f.events.size() == mem.events.size());
+    REQUIRE_FALSE(f.events.empty());
+    for (std::size_t k = 0; k < f.events.size(); ++k) {
+      const EventRecord &a = f.events[k], &b = mem.events[k];
+      CHECK(a.kind == b.kind);
+      CHECK(a.phase_before == b.phase_before);
+      CHECK(a.phase_after == b.phase_after);
+      CHECK(a.witness == b.witness);
+      CHECK(a.note == b.note);
+      for (const EventColumn& c : event_columns())
+        if (c.field == EventField::Number || c.field == EventField::Time)
+          CHECK(same_bits(event_number(a, c.name), event_number(b, c.name)));
+    }
+    CHECK(f.summary_json.find("\"complete\": true") != std::string::npos);
+    // the analyses' view of the same folder: the samples
+    const RunRecord r = read_run(dir.string());
+    REQUIRE(r.samples.size() == mem.samples.size());
+    CHECK(r.events == static_cast<long>(mem.events.size()));
+    CHECK(same_bits(r.samples.back().q[2], mem.samples.back().q[2]));
+    std::filesystem::remove_all(dir);
+  }
+}
+
+TEST_CASE("read_run_files: a malformed event row names the file, line and column", "[io][unit]") {
+  const CaseSpec spec =
+      load_case(std::string(RUBDYN_SOURCE_DIR) + "/cases/reference.toml", {"run.t_end=0.01"});
+  const auto dir = std::filesystem::temp_directory_path() / "rubdyn_read_run_files_bad";
+  std::filesystem::remove_all(dir);
+  {
+    OutputFolder folder(dir.string(), spec);
+    simulate(spec, folder);
+  }
+  std::string ev;
+  {
+    std::ifstream in(dir / "events.csv");
+    ev.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const auto second_line = ev.find('\n') + 1;
+  REQUIRE(second_line < ev.size());
+  const auto comma = ev.find(',', second_line);
+  // the kind of the first event replaced by a word that is none
+  const auto comma2 = ev.find(',', comma + 1);
+  ev.replace(comma + 1, comma2 - comma - 1, "bounce");
+  std::ofstream(dir / "events.csv", std::ios::binary | std::ios::trunc) << ev;
+  CHECK_THROWS_WITH(read_run_files(dir.string()),
+                    Catch::Contains("events.csv:2: column kind: 'bounce' is not an event kind"));
+  std::filesystem::remove_all(dir);
 }

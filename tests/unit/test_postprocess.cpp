@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "rubdyn/analysis/postprocess.hpp"
-#include "rubdyn/analysis/sweep.hpp"
+#include "rubdyn/driver/sweep.hpp"
 
 using namespace rubdyn;
 namespace fs = std::filesystem;

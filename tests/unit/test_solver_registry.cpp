@@ -1,4 +1,4 @@
-// The solver registry (io/solver_registry.hpp) against the documentation and the case file: the
+// The solver registry (io/solver_options.hpp) against the documentation and the case file: the
 // documented solvers are exactly the registered ones, every key a solver reads is a documented
 // [solver] key, and every entry runs a case and tightens it for sweep --certify.
 #include <catch2/catch.hpp>
@@ -8,8 +8,9 @@
 #include <sstream>
 #include <string>
 
+#include "rubdyn/driver/simulate.hpp"
 #include "rubdyn/io/case_io.hpp"
-#include "rubdyn/io/solver_registry.hpp"
+#include "rubdyn/io/solver_options.hpp"
 
 using namespace rubdyn;
 
@@ -90,7 +91,7 @@ TEST_CASE("Solver registry: every entry runs a case and tightens it", "[registry
     CHECK(s.solver == e.name);
     CHECK(s.t_reached == Approx(0.002).epsilon(1e-12));
     // tighter: overrides the case file accepts, with a smaller tolerance or step
-    std::vector<std::string> over = e.tighter(spec);
+    std::vector<std::string> over = tighter_settings(spec);
     over.push_back(kind);
     const CaseSpec tight = load_case(RUBDYN_SOURCE_DIR "/cases/reference.toml", over);
     if (e.fixed_step)

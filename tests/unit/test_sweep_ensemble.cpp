@@ -18,7 +18,7 @@
 #include <sstream>
 #include <thread>
 
-#include "rubdyn/analysis/sweep.hpp"
+#include "rubdyn/driver/sweep.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "support/cli.hpp"
 

@@ -56,6 +56,7 @@
 #include <functional>
 #include <vector>
 
+#include "rubdyn/core/run_envelope.hpp"
 #include "rubdyn/core/run_types.hpp"
 #include "rubdyn/model/lagrangian_model.hpp"
 
@@ -72,7 +73,9 @@ enum class ContactFormulation {
   Projection
 };
 
-struct EventDrivenOptions {
+/// The integrator's own options, beside the run controls every solver shares (output_dt,
+/// omega_lim, progress, stop, max_wall: core/run_envelope.hpp).
+struct EventDrivenOptions : RunControls {
   double rtol = 1e-10;
   double atol = 1e-12;  ///< absolute tolerance on positions [m]; velocities: atol * 1e3 [m/s]
   /// Free flight with Adams-Moulton (fixed-point iteration) instead of BDF. Measured on the
@@ -84,20 +87,11 @@ struct EventDrivenOptions {
   /// Adams phases solve their implicit corrector by fixed-point iteration (no Jacobian, no
   /// linear algebra) instead of Newton with a difference-quotient Jacobian.
   bool fixed_point = true;
-  double output_dt = 1e-4;
-  double omega_lim = 0.0;  ///< crossing time reported (0: none)
   double max_events_per_second = 1e6;
   /// CVODE's step limit per call (CVodeSetMaxNumSteps applies it per call to CVode, i.e. per
   /// output interval or event), not per phase; reaching it ends the run (solver_failure).
   long max_steps_per_call = 10'000'000;
-  /// Called at output samples with (t, events so far, omega, phase); may be empty.
-  std::function<void(double, long, double, Phase)> progress;
-  /// When set and true (a signal handler sets it), the run ends right after its next output
-  /// sample with Termination::Interrupted, keeping what it wrote.
-  const std::atomic<bool>* stop = nullptr;
-  /// Wall-time budget [s], 0 = none: once spent, the run ends right after its next output
-  /// sample with Termination::TimeBudget, keeping what it wrote.
-  double max_wall = 0.0;
+  // (run controls: progress and stop act at output samples, as does the wall-time budget)
 };
 
 /// Every rule that `opt` breaks (empty: valid): rtol and atol finite and > 0; output_dt finite

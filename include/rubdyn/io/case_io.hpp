@@ -8,6 +8,7 @@
 // validated the same way (their issues name "--set" as the file).
 #include <string>
 #include <string_view>
+#include <variant>
 #include <vector>
 
 #include "rubdyn/io/case_spec.hpp"
@@ -42,6 +43,16 @@ std::string toml_quote(std::string_view text);
 /// loads.spin, loads.torque_law), in the order of case.resolved.toml: the schema of
 /// io/case_toml.cpp, for documentation and its test.
 std::vector<std::string> case_keys(const CaseSpec& c);
+
+/// One key of a case with its value (numbers as double, integers as int, choices as their word).
+struct CaseEntry {
+  std::string section, key;
+  std::variant<double, int, bool, std::string> value;
+  std::string full() const { return section + "." + key; }
+};
+/// Every key of the case with its value, in the order of case.resolved.toml (to_toml writes
+/// them; the Python Case reads them).
+std::vector<CaseEntry> case_values(const CaseSpec& c);
 
 /// The output folder of a case: output.folder if set, else "out/<name>".
 std::string output_folder(const CaseSpec& c);

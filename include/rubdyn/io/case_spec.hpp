@@ -34,7 +34,7 @@ struct RunOptions {
 
 /// [solver]
 struct SolverOptions {
-  std::string kind = "event";  ///< a solver of the registry (io/solver_registry.hpp)
+  std::string kind = "event";  ///< a solver of the registry (io/solver_options.hpp)
   // event-driven
   double rtol = 1e-10;           ///< relative tolerance
   double atol = 1e-12;           ///< absolute tolerance, scaled per component by the solver

@@ -50,6 +50,9 @@ std::vector<SampleColumn> timeseries_columns(const LagrangianModel& m);
 
 /// A column's value in a sample, as a number (Phase: its code, the Phase enum value).
 double sample_value(const Sample& s, const SampleColumn& c);
+/// Sets a column's value in a sample (the inverse of sample_value). A Phase value must be a
+/// phase's code (0 free .. 3 stick): std::invalid_argument otherwise.
+void set_sample_value(Sample& s, const SampleColumn& c, double x);
 
 /// What an events column holds.
 enum class EventField { Time, Kind, PhaseBefore, PhaseAfter, Number, Text, Contact };
@@ -65,5 +68,13 @@ std::vector<EventColumn> event_columns(int contacts = 1);
 double event_number(const EventRecord& e, std::string_view name);
 /// A text column's value (witness, note).
 const std::string& event_text(const EventRecord& e, std::string_view name);
+/// Sets an event column from the text the writer (output_files.cpp) put in events.csv: numbers
+/// (an empty t_accumulation: NaN), the kind and phases as words, the 1-based contact number.
+/// Throws std::invalid_argument naming the column and the value it cannot read.
+void set_event_field(EventRecord& e, const EventColumn& c, const std::string& text);
+
+/// The phase / event kind named by a word of the output files (false: no such word).
+bool parse_phase(std::string_view word, Phase& out);
+bool parse_event_kind(std::string_view word, EventKind& out);
 
 }  // namespace rubdyn

@@ -10,6 +10,7 @@
 
 #include "rubdyn/core/run_types.hpp"
 #include "rubdyn/io/case_spec.hpp"
+#include "rubdyn/io/columns.hpp"
 
 namespace rubdyn {
 
@@ -33,7 +34,33 @@ CsvTable read_csv(const std::string& path, bool empty_ok = false);
 /// A whole field as a number (strtod; false for an empty field or trailing text).
 bool parse_number(const std::string& field, double& x);
 
-/// A run read back from its output folder.
+/// timeseries.csv as columns: the model's column table (io/columns.hpp) and each column's
+/// values in file order (a phase column: the Phase codes). Columns are found by name; a column
+/// of the table that the file lacks is an error, a column the table lacks is ignored.
+struct SeriesTable {
+  std::vector<SampleColumn> columns;
+  std::vector<std::vector<double>> values;  ///< values[c][row]
+  std::size_t rows() const { return values.empty() ? 0 : values.front().size(); }
+};
+
+/// An output folder read back whole: the case it ran, the samples as columns, the events, the
+/// summary as written. The one reader of output folders: read_run (the analyses) and the Python
+/// package (rubdyn.read) both read through it.
+struct RunFiles {
+  std::string dir;
+  CaseSpec spec;                      ///< case.resolved.toml
+  SeriesTable series;                 ///< timeseries.csv
+  std::vector<EventRecord> events;    ///< events.csv (none if absent or header-only)
+  std::string summary_json;           ///< summary.json as written (empty: absent)
+  bool complete = true;               ///< summary.json "complete" (false: ended early or absent)
+  std::vector<std::string> warnings;  ///< what the reader tolerated
+};
+/// Throws std::runtime_error naming the file, line, column and problem on a missing or bad
+/// file (case.resolved.toml and timeseries.csv are required; events.csv and summary.json may be
+/// missing after a killed run).
+RunFiles read_run_files(const std::string& dir);
+
+/// A run read back from its output folder, as samples (what the analyses read).
 struct RunRecord {
   std::string dir;
   CaseSpec spec;                      ///< case.resolved.toml

@@ -15,6 +15,7 @@
 #include <string_view>
 #include <vector>
 
+#include "rubdyn/core/run_envelope.hpp"
 #include "rubdyn/core/run_types.hpp"
 #include "rubdyn/model/lagrangian_model.hpp"
 
@@ -25,7 +26,10 @@ std::string_view to_string(FixedStepScheme s);
 /// Parses "carp-onevc" | "carp-qn" | "mj" | "mj-proj"; returns false on an unknown name.
 bool parse_fixed_step_scheme(std::string_view name, FixedStepScheme& out);
 
-struct FixedStepOptions {
+/// The schemes' own options, beside the run controls every solver shares (output_dt,
+/// omega_lim, progress, stop, max_wall: core/run_envelope.hpp). A fixed-step run checks the
+/// stop flag before every step and reads the clock for the wall-time budget every 1024 steps.
+struct FixedStepOptions : RunControls {
   FixedStepScheme scheme = FixedStepScheme::MoreauJean;
   double h = 1e-6;        ///< time step [s]
   int itmax = 20;         ///< carp-qn: max quasi-Newton iterations per step
@@ -37,16 +41,6 @@ struct FixedStepOptions {
   /// MLCPProjectOnConstraints without mass normalisation).
   bool project_with_mass = true;
   int output_every = 0;  ///< write every N-th step (0: use output_dt)
-  double output_dt = 1e-4;
-  double omega_lim = 0.0;  ///< for the summary: first time omega (the model's spin) >= it
-  /// When set and true (a signal handler sets it), the run ends before its next step with
-  /// Termination::Interrupted, keeping what it wrote.
-  const std::atomic<bool>* stop = nullptr;
-  /// Called at output samples with (t, events so far, omega, phase); may be empty.
-  std::function<void(double, long, double, Phase)> progress;
-  /// Wall-time budget [s], 0 = none: once spent, the run ends before its next step (the clock
-  /// is read every 1024 steps) with Termination::TimeBudget, keeping what it wrote.
-  double max_wall = 0.0;
 };
 
 /// Largest number of steps of one fixed-step run (README, "Exit codes and the output contract").

@@ -1,4 +1,4 @@
-#include "rubdyn/analysis/sweep.hpp"
+#include "rubdyn/driver/sweep.hpp"
 
 #include <fmt/format.h>
 
@@ -22,13 +22,13 @@
 #include <utility>
 
 #include "rubdyn/core/demand.hpp"
+#include "rubdyn/driver/simulate.hpp"
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/io/output_folder.hpp"
 #include "rubdyn/io/output_reader.hpp"
-#include "rubdyn/io/simulate.hpp"
-#include "rubdyn/io/solver_registry.hpp"
+#include "rubdyn/io/solver_options.hpp"
 #include "rubdyn/io/text_files.hpp"
 
 namespace rubdyn {
@@ -62,11 +62,11 @@ std::string opt_csv(const std::optional<double>& x) {
   return x ? fmt::format("{}", *x) : "";
 }
 
-// Tighter solver settings for --certify, as case overrides (the solver registry's).
+// Tighter solver settings for --certify, as case overrides (driver/simulate.hpp).
 std::vector<std::string> tight_overrides(const CaseSpec& s) {
-  const SolverEntry* solver = find_solver(s.solver.kind);
-  if (!solver) throw std::invalid_argument("unknown solver kind " + s.solver.kind);
-  return solver->tighter(s);
+  if (!find_solver(s.solver.kind))
+    throw std::invalid_argument("unknown solver kind " + s.solver.kind);
+  return tighter_settings(s);
 }
 
 struct OneRun {
