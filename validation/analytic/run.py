@@ -10,7 +10,7 @@ fast (rubdyn_runs.py says what is measured and how).
   (c) Black's model, steady rolling on both branches of the bistable set BLACK_ROLL;
   (d) whip with frequency locking (BLACK_WHIP): locked whirl, N, the spin's rate, t_stick;
   (e) unbalance at a prescribed speed, rigid stator (UNB): N, delta, the drive torque, and
-      which root attracts (pending while this rubdyn does not apply loads.spin = "prescribed");
+      which root attracts;
   (f) power balance over windows of whole whirl periods of the converged orbits.
 Then the same comparisons at four tolerances (what the remaining differences are due to), the
 decay rate of each approach against the orbit's eigenvalue.
@@ -298,8 +298,8 @@ def write_table(path, S, ladder, rates, label, wall_total):
                 continue
             pred = rigid_predicted(st) if key.startswith("rigid-") else {}
             rid = ", ".join(ids[o.folder] for _, o in st.runs)
-            if st.status == "pending":
-                L.append("| %s | all | - | - | - | pending | pending | %s |"
+            if st.status == "refused":
+                L.append("| %s | all | - | - | - | refused | refused | %s |"
                          % (title, rid))
                 L.append("| | | | | | | | *%s* |" % "; ".join(st.notes).replace("|", "/"))
                 continue
@@ -378,7 +378,7 @@ def write_table(path, S, ladder, rates, label, wall_total):
         cells = []
         for lab, _ in LADDER:
             st = ladder["S"][lab].get(key)
-            if st is None or st.status in ("pending", "skipped"):
+            if st is None or st.status in ("refused", "skipped"):
                 cells.append(short_status(st))
                 continue
             cells.append("; ".join("%d steps, %.3f s%s" % (
