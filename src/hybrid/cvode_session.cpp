@@ -8,6 +8,7 @@
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -188,7 +189,11 @@ struct CvodeSession::Impl {
     const double* yy = N_VGetArrayPointer(y);
     double* w = N_VGetArrayPointer(ewt);
     for (int i = 0; i < self->n; ++i) {
-      const double tol = self->rtol[i] * std::abs(yy[i]) + self->atol[i];
+      // never below the state's own round-off (decision_tolerances.hpp, kRoundoffFloor): an
+      // absolute weight on a chart angle that grows through a long phase would otherwise ask
+      // for more digits than a double holds, and CVODE stops (CV_TOO_MUCH_ACC)
+      const double a = std::abs(yy[i]);
+      const double tol = std::max(self->rtol[i] * a + self->atol[i], kRoundoffFloor * kEps * a);
       if (!(tol > 0.0)) return -1;
       w[i] = 1.0 / tol;
     }

@@ -55,6 +55,17 @@ inline constexpr int kChatterWindow = 64;
 /// 1e-10.
 inline constexpr double kFirstStepHorizon = 1e-3;
 
+/// The error weight of a component y_i of a CVODE state is 1 / tol_i with tol_i >= kRoundoffFloor
+/// eps |y_i| (cvode_session.cpp): a tolerance below the component's own round-off cannot be met
+/// and CVODE stops with CV_TOO_MUCH_ACC once eps ||y||_wrms > 1. It binds only on the chart
+/// angles of contact phases, whose weights are absolute ((rtol g0 + atol) / L: a chart angle
+/// that turns through a long roll grows without bound: at rtol 1e-10, g0 = 2e-4 m, R = 0.05 m
+/// from |theta - theta_a| = 19 rad on, where 100 eps |theta - theta_a| reaches that weight).
+/// 100: CVODE's error estimates carry a few eps |y| of noise; a hundred keeps them far below
+/// the test, and the demand (2e-14 relative) is still far beyond any measurement of a roll.
+inline constexpr double kRoundoffFloor = 100.0;
+inline constexpr double kEps = 2.220446049250313e-16;  // DBL_EPSILON
+
 /// The tolerances of one run, derived from the user's rtol, atol and the gap's scale g0.
 struct SwitchTolerances {
   double v_tol = 0;       ///< velocity below which a closing contact is an arrival, not an impact
