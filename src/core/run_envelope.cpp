@@ -6,23 +6,22 @@
 
 namespace rubdyn {
 
-RunEnvelope::RunEnvelope(const LagrangianModel& m, const RunControls& c, OutputSink& sink,
-                         const MechanicalState& init, double t_end, std::string solver,
-                         std::string options, long first_output)
-    : m_(m),
-      c_(c),
+RunEnvelope::RunEnvelope(const RunControls& c, OutputSink& sink, double t_start, double t_end,
+                         double energy_initial, double mu, std::string solver, std::string options,
+                         long first_output)
+    : c_(c),
       sink_(sink),
-      mon_(m.contact_law(0).mu, c.omega_lim),
+      mon_(mu, c.omega_lim),
       wall0_(std::chrono::steady_clock::now()),
-      t0_(init.t),
-      next_out_(init.t + static_cast<double>(first_output) * c.output_dt),
+      t0_(t_start),
+      next_out_(t_start + static_cast<double>(first_output) * c.output_dt),
       k_out_(first_output) {
   sum_.solver = std::move(solver);
   sum_.options = std::move(options);
-  sum_.t_start = init.t;
+  sum_.t_start = t_start;
   sum_.t_end_requested = t_end;
-  sum_.t_reached = init.t;
-  sum_.energy_initial = m.mechanical_energy(init.t, init.q, init.v);
+  sum_.t_reached = t_start;
+  sum_.energy_initial = energy_initial;
 }
 
 long RunEnvelope::event_count() const {

@@ -432,7 +432,8 @@ class Integrator {
 
 RunSummary Integrator::run(const MechanicalState& init, double t_end) {
   t_end_ = t_end;
-  env_.emplace(m_, opt_, sink_, init, t_end, "event",
+  env_.emplace(opt_, sink_, init.t, t_end, m_.mechanical_energy(init.t, init.q, init.v), law_.mu,
+               "event",
                fmt::format("{{\"rtol\": {:.3g}, \"atol\": {:.3g}, \"free_flight\": \"{}\", "
                            "\"contact_phases\": \"{}\", \"adams_iteration\": \"{}\", "
                            "\"output_dt\": {:.6g}}}",
@@ -453,7 +454,11 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
   double t_root = 0.0;
   Vec q_root = q, v_root = v;
   Works work_root{};
-  std::vector<int> info;
+  // the roots' flags and the witnesses that fired, with room for every witness: a root that is
+  // no event (a gap minimum well clear of the ring, once per whirl turn) allocates nothing
+  std::vector<int> info(kNumWitnesses, 0);
+  std::vector<Witness> fired_from;
+  fired_from.reserve(kNumWitnesses);
   try {
     open_sessions();
     ok = start(init);
@@ -514,7 +519,7 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
       emit_outputs_before(t);
       info.assign(wit_.list.size(), 0);
       cur_->session().root_info(info.data());
-      const std::vector<Witness> fired_from = wit_.list;  // handlers rebuild the witness set
+      fired_from.assign(wit_.list.begin(), wit_.list.end());  // handlers rebuild the witness set
       bool restarted = false;
       for (size_t i = 0; i < fired_from.size() && ok && !restarted; ++i)
         if (info[i] != 0) ok = on_root(fired_from[i], t, q, v, restarted);

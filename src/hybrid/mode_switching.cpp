@@ -7,7 +7,7 @@
 namespace rubdyn::detail {
 
 ModeSwitcher::ModeSwitcher(const LagrangianModel& m, const SwitchTolerances& tol)
-    : m_(m), law_(m.contact_law(0)), tol_(tol) {}
+    : m_(m), law_(m.contact_law(0)), tol_(tol), kin_(m.num_dofs()), op_(m.num_dofs()) {}
 
 void ModeSwitcher::project_position(double t, VecOut q, VecIn v) const {
   ContactKinematics c(m_.num_dofs());
@@ -136,13 +136,13 @@ Transition ModeSwitcher::on_constraint(double t, VecIn q_in, VecIn v_in, EventRe
 }
 
 ModeSwitcher::GapMinimum ModeSwitcher::classify_gap_minimum(double t, VecIn q, VecIn v) const {
-  const ContactKinematics c = m_.contact(0, t, q, v);
+  m_.compute_contact(0, t, q, v, kin_);
+  const ContactKinematics& c = kin_;
   if (c.d_N > tol_.graze_band) return GapMinimum::Clear;
   if (c.d_N < -tol_.graze_tol) return GapMinimum::Crossed;
   if (c.d_N > tol_.graze_tol) return GapMinimum::TouchAndGo;
-  ContactOperators op(m_.num_dofs());
-  compute_contact_operators(m_, t, q, v, op);
-  return op.b_N >= 0.0 ? GapMinimum::TouchAndGo : GapMinimum::Grazing;
+  compute_contact_operators(m_, t, q, v, op_);
+  return op_.b_N >= 0.0 ? GapMinimum::TouchAndGo : GapMinimum::Grazing;
 }
 
 EventRecord ModeSwitcher::grazing_record(double t, VecIn q, VecIn v, bool touch_and_go) const {

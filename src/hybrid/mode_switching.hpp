@@ -68,6 +68,10 @@ class ModeSwitcher {
   const LagrangianModel& m_;
   const ContactLaw law_;
   const SwitchTolerances tol_;
+  // workspaces of classify_gap_minimum, which runs at every gap minimum of free flight (once per
+  // whirl turn), not only at events: sized here, so that it allocates nothing
+  mutable ContactKinematics kin_;
+  mutable ContactOperators op_;
 };
 
 /// Bounds on events: more than kMaxSameInstant at one instant (mode switching that loops) or

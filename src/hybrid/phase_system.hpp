@@ -33,11 +33,16 @@ using Works = std::array<double, kNw>;
 
 /// What ends a phase (event_driven.hpp lists them per phase).
 enum class Witness { Gap, GapRate, NormalForce, SlipSpeed, ConeUpper, ConeLower, Omega };
+inline constexpr std::size_t kNumWitnesses = static_cast<std::size_t>(Witness::Omega) + 1;
 const char* witness_name(Witness w);
 
 /// The witnesses of the running phase, their directions and scales. Owned by the integrator,
 /// read by the root function of every session.
 struct WitnessSet {
+  WitnessSet() {  // room for every witness: rebuilding the set at a root allocates nothing
+    list.reserve(kNumWitnesses);
+    dirs.reserve(kNumWitnesses);
+  }
   std::vector<Witness> list;
   std::vector<int> dirs;
   double g0 = 1.0, v_ref = 1.0, F_ref = 1.0, omega_lim = 0.0;

@@ -294,8 +294,9 @@ RunSummary run_fixed_step(const LagrangianModel& model, const MechanicalState& i
   o.h = (t_end - initial.t) / static_cast<double>(n_steps);
   const std::unique_ptr<Stepper> stepper = make_stepper(model, o);
   // the first step end at or after each grid time, the initial time included: first_output 0
-  RunEnvelope env(model, o, sink, initial, t_end, std::string(stepper->name()),
-                  stepper->options_json(), 0);
+  RunEnvelope env(o, sink, initial.t, t_end,
+                  model.mechanical_energy(initial.t, initial.q, initial.v), model.contact_law(0).mu,
+                  std::string(stepper->name()), stepper->options_json(), 0);
   RunLoop loop(model, o, env);
   return loop.run(*stepper, initial, t_end);
 }

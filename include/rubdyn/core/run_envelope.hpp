@@ -14,7 +14,6 @@
 
 #include "rubdyn/core/run_monitor.hpp"
 #include "rubdyn/core/run_types.hpp"
-#include "rubdyn/model/lagrangian_model.hpp"
 
 namespace rubdyn {
 
@@ -40,12 +39,14 @@ struct RunWorks {
 
 class RunEnvelope {
  public:
-  /// Opens the books of a run of `solver` (its options as a JSON object text) from `init` to
-  /// t_end. The output grid starts at k = first_output (the event-driven integrator writes the
-  /// initial sample itself: 1; the fixed-step loop writes the first step end at or after each
-  /// grid time, the initial time included: 0).
-  RunEnvelope(const LagrangianModel& m, const RunControls& c, OutputSink& sink,
-              const MechanicalState& init, double t_end, std::string solver, std::string options,
+  /// Opens the books of a run of `solver` (its options as a JSON object text) from t_start to
+  /// t_end, with the initial state's mechanical energy and the contact's friction coefficient
+  /// (the monitor's cone). The output grid starts at k = first_output (the event-driven
+  /// integrator writes the initial sample itself: 1; the fixed-step loop writes the first step
+  /// end at or after each grid time, the initial time included: 0). Nothing here knows the
+  /// model: core sits below it.
+  RunEnvelope(const RunControls& c, OutputSink& sink, double t_start, double t_end,
+              double energy_initial, double mu, std::string solver, std::string options,
               long first_output = 1);
 
   RunSummary& summary() { return sum_; }
@@ -87,7 +88,6 @@ class RunEnvelope {
   RunSummary finish(double t_reached, double energy_final, const RunWorks& w);
 
  private:
-  const LagrangianModel& m_;
   const RunControls& c_;
   OutputSink& sink_;
   RunMonitor mon_;
