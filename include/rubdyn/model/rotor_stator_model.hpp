@@ -29,6 +29,20 @@
 // gyroscopic forces do no work: d(T+V)/dt = tau_a theta' - v^T D v + F_N v_N + F_T v_t.
 // Contact kinematics: see contact/contact_kinematics.hpp (eq. 17-19).
 //
+// Loads beyond the paper (docs/models.md, sections 2-3; model/loads.hpp):
+//   - a mass unbalance u_b = m eps (loads.unbalance) in the plane of G at the angle theta + phi_u
+//     from X. It adds to T the cross terms u_b theta' (-sin(theta + phi_u) x_G' + cos(theta +
+//     phi_u) y_G') with x_G = nu x_r + (1 - nu) x_b: M(q) gains the theta-column entries
+//     -u_b s nu, u_b c nu (rows x_r, y_r) and -u_b s (1-nu), u_b c (1-nu) (rows x_b, y_b),
+//     s = sin(theta + phi_u), c = cos(theta + phi_u); the lateral rows gain the centrifugal
+//     force u_b theta'^2 (c, s) spread by nu and 1 - nu; the theta row gains gravity's torque
+//     -u_b g c. Jp is the polar inertia about the shaft axis with the unbalance's m eps^2
+//     included. With u_b = 0 every formula above is the paper's, to the same arithmetic.
+//   - the drive torque tau(Omega): constant tau_a, or the linear law tau_a (1 - Omega /
+//     loads.torque_free_speed) (its derivative -tau_a / Omega_0 enters the velocity Jacobian).
+//   - loads.spin = "prescribed": the model is wrapped by PrescribedSpin (prescribed_spin.hpp),
+//     which drops the theta row and reports the holding torque.
+//
 // Structured mass solve. M couples x_b-x_r and y_b-y_r through the constant 2x2 block
 // A = [[M11, M12], [M12, M22]] and every rotor lateral dof to theta through the column
 // b = (H_y, H_x, -H_y, -H_x) (rows x_b, y_b, x_r, y_r); the stator is diagonal. With u = A^-1 b
