@@ -8,7 +8,6 @@
 
 #include <array>
 #include <initializer_list>
-
 #include <string>
 #include <vector>
 
@@ -60,6 +59,37 @@ void fixed_step(benchmark::State& st, FixedStepScheme scheme, double mu, double 
       benchmark::Counter(static_cast<double>(steps), benchmark::Counter::kIsRate);
 }
 
+/// Steps and per-phase cost over a benchmark's runs, reported as its counters: "steps/s", and
+/// microseconds per integrator step in each phase (0 where a phase took no step).
+struct PhaseCost {
+  long steps = 0;
+  std::array<long, kNumPhases> phase_steps{};
+  std::array<double, kNumPhases> phase_wall{};
+  void add(const RunSummary& s) {
+    steps += s.steps;
+    for (int k = 0; k < kNumPhases; ++k) {
+      phase_steps[k] += s.phase_steps[k];
+      phase_wall[k] += s.phase_wall[k];
+    }
+  }
+  void report(benchmark::State& st) const {
+    st.counters["steps/s"] =
+        benchmark::Counter(static_cast<double>(steps), benchmark::Counter::kIsRate);
+    auto us = [&](std::initializer_list<Phase> phases) {
+      long n = 0;
+      double w = 0.0;
+      for (Phase p : phases) {
+        n += phase_steps[static_cast<int>(p)];
+        w += phase_wall[static_cast<int>(p)];
+      }
+      return n > 0 && w > 0.0 ? 1e6 * w / static_cast<double>(n) : 0.0;
+    };
+    st.counters["free_us"] = us({Phase::Free});
+    st.counters["slip_us"] = us({Phase::SlipPos, Phase::SlipNeg});
+    st.counters["stick_us"] = us({Phase::Stick});
+  }
+};
+
 void event_driven(benchmark::State& st, double mu, double t_end, double rtol,
                   ContactFormulation contact) {
   const RotorStatorModel model(with_mu(mu));
@@ -69,67 +99,29 @@ void event_driven(benchmark::State& st, double mu, double t_end, double rtol,
   o.output_dt = 1e-4;
   o.omega_lim = 2110.0;
   o.contact_phases = contact;
-  long steps = 0;
-  std::array<long, kNumPhases> phase_steps{};
-  std::array<double, kNumPhases> phase_wall{};
+  PhaseCost cost;
   for (auto _ : st) {
     NullSink sink;
     const RunSummary s = run_event_driven(model, reference_start(), t_end, o, sink);
-    steps += s.steps;
-    for (int k = 0; k < kNumPhases; ++k) {
-      phase_steps[k] += s.phase_steps[k];
-      phase_wall[k] += s.phase_wall[k];
-    }
+    cost.add(s);
     benchmark::DoNotOptimize(s.omega_final);
   }
-  st.counters["steps/s"] =
-      benchmark::Counter(static_cast<double>(steps), benchmark::Counter::kIsRate);
-  auto us_per_step = [&](std::initializer_list<Phase> phases) {
-    long n = 0;
-    double w = 0.0;
-    for (Phase p : phases) {
-      n += phase_steps[static_cast<int>(p)];
-      w += phase_wall[static_cast<int>(p)];
-    }
-    return n > 0 ? 1e6 * w / static_cast<double>(n) : 0.0;
-  };
-  st.counters["free_us"] = us_per_step({Phase::Free});
-  st.counters["slip_us"] = us_per_step({Phase::SlipPos, Phase::SlipNeg});
-  st.counters["stick_us"] = us_per_step({Phase::Stick});
+  cost.report(st);
 }
 
 /// A case file of the repository with overrides, run as `rubdyn run` runs it (the model
 /// registry builds the model, simulate picks the solver), the output discarded.
 void from_case(benchmark::State& st, const char* file, std::vector<std::string> overrides) {
   const CaseSpec spec = load_case(std::string(RUBDYN_SOURCE_DIR) + "/cases/" + file, overrides);
-  long steps = 0;
-  std::array<long, kNumPhases> phase_steps{};
-  std::array<double, kNumPhases> phase_wall{};
+  PhaseCost cost;
   for (auto _ : st) {
     NullSink sink;
     const RunSummary s = simulate(spec, sink);
     if (!s.complete()) st.SkipWithError(s.message.c_str());
-    steps += s.steps;
-    for (int k = 0; k < kNumPhases; ++k) {
-      phase_steps[k] += s.phase_steps[k];
-      phase_wall[k] += s.phase_wall[k];
-    }
+    cost.add(s);
     benchmark::DoNotOptimize(s.omega_final);
   }
-  st.counters["steps/s"] =
-      benchmark::Counter(static_cast<double>(steps), benchmark::Counter::kIsRate);
-  auto us = [&](std::initializer_list<Phase> phases) {
-    long n = 0;
-    double w = 0.0;
-    for (Phase p : phases) {
-      n += phase_steps[static_cast<int>(p)];
-      w += phase_wall[static_cast<int>(p)];
-    }
-    return n > 0 && w > 0.0 ? 1e6 * w / static_cast<double>(n) : 0.0;
-  };
-  st.counters["free_us"] = us({Phase::Free});
-  st.counters["slip_us"] = us({Phase::SlipPos, Phase::SlipNeg});
-  st.counters["stick_us"] = us({Phase::Stick});
+  cost.report(st);
 }
 
 constexpr auto kReduced = ContactFormulation::Reduced;
@@ -171,8 +163,7 @@ BENCHMARK_CAPTURE(event_driven, mu025_event_150ms_rtol1e10_projection, 0.25, 0.1
 // The Jeffcott-Black rotor (cases/jeffcott.toml: unbalanced, through its critical speed into
 // forward rub at 7.5 ms), 5 dofs on the dynamic-size paths: the event solver over 0.2 s, and
 // Moreau-Jean over 50 ms
-BENCHMARK_CAPTURE(from_case, jeffcott_event_200ms_rtol1e10, "jeffcott.toml",
-                  {"run.t_end=0.2"})
+BENCHMARK_CAPTURE(from_case, jeffcott_event_200ms_rtol1e10, "jeffcott.toml", {"run.t_end=0.2"})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(from_case, jeffcott_mj_50ms_h1e6, "jeffcott.toml",
                   {"run.t_end=0.05", "solver.kind=\"mj\"", "solver.h=1e-6"})

@@ -28,8 +28,7 @@ long RunEnvelope::event_count() const {
   return std::accumulate(sum_.events.begin(), sum_.events.end(), 0L);
 }
 
-bool RunEnvelope::stop_requested(double t) {
-  if (!(c_.stop && c_.stop->load(std::memory_order_relaxed))) return false;
+bool RunEnvelope::interrupt(double t) {
   fail(Termination::Interrupted, fmt::format("interrupted at t = {:.17g}", t));
   return true;
 }

@@ -498,7 +498,7 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
                          cur_->session().last_error()));
         break;
       }
-      if (!q.allFinite() || !v.allFinite()) {
+      if (!all_finite(q) || !all_finite(v)) {
         fail(Termination::NonFinite, fmt::format("non-finite state at t = {:.17g}", t));
         break;
       }

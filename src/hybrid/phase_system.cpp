@@ -223,7 +223,7 @@ int FreeFlight::rhs(double t, const double* y, double* yd, void* user) {
   self->m_.smooth_forces(t, q, v, f);
   self->m_.solve_mass(q, a);
   self->powers(t, q, v, a.col(0), 0.0, 0.0, 0.0, yd + 2 * n);
-  return a.allFinite() ? 0 : 1;
+  return all_finite(a) ? 0 : 1;
 }
 
 // Analytic Jacobian: d/dq (M^{-1} f) = M^{-1} (df/dq - d(M a)/dq), with a fixed.
@@ -282,7 +282,7 @@ int ProjectedContact::rhs(double t, const double* y, double* yd, void* user) {
   VMap(yd, n) = v;
   VMap(yd + n, n) = s.dyn.a;
   self->powers(t, q, v, s.dyn.a, s.dyn.F_N, s.dyn.F_T, s.dyn.F_T * s.op.c.v_t, yd + 2 * n);
-  return s.dyn.a.allFinite() ? 0 : 1;
+  return all_finite(s.dyn.a) ? 0 : 1;
 }
 
 int ProjectedContact::proj(double t, const double* y, double* corr, void* user) {
@@ -296,7 +296,7 @@ int ProjectedContact::proj(double t, const double* y, double* corr, void* user) 
   VMap(corr, n) = s.q - q0;
   VMap(corr + n, n) = s.v - v0;
   std::fill(corr + 2 * n, corr + 2 * n + kNw, 0.0);
-  return s.q.allFinite() && s.v.allFinite() ? 0 : -1;
+  return all_finite(s.q) && all_finite(s.v) ? 0 : -1;
 }
 
 // ---- ReducedContact ---------------------------------------------------------------------------
@@ -342,7 +342,7 @@ int ReducedContact::rhs(double t, const double* y, double* yd, void* user) {
   pdot = pd;
   self->chart_.reduce(self->mode_, self->anchor_, p, pd, s.q, s.dyn.a, pdd);
   self->powers(t, s.q, s.v, s.dyn.a, s.dyn.F_N, s.dyn.F_T, s.dyn.F_T * s.op.c.v_t, yd + 2 * d);
-  return pdd.allFinite() ? 0 : 1;
+  return all_finite(pdd) ? 0 : 1;
 }
 
 }  // namespace rubdyn::detail

@@ -188,7 +188,7 @@ StepOutcome Carpenter<N>::step(double t, StepReport& r, std::string& message) {
       newton_.apply_inverse(R_, step_);
       d -= step_;
       ++r.newton_iters;
-      if (!d.allFinite()) {
+      if (!all_finite(d)) {
         message = fmt::format("{}: non-finite iterate at t = {:.17g}", name(), t);
         return StepOutcome::NonFinite;
       }
@@ -239,7 +239,7 @@ StepOutcome Carpenter<N>::step(double t, StepReport& r, std::string& message) {
       step_ = dn_ - d;  // the change of the iterate
       d = dn_;
       ++r.newton_iters;
-      if (!d.allFinite()) {
+      if (!all_finite(d)) {
         message = fmt::format("{}: non-finite iterate at t = {:.17g}", name(), t);
         return StepOutcome::NonFinite;
       }
@@ -254,7 +254,7 @@ StepOutcome Carpenter<N>::step(double t, StepReport& r, std::string& message) {
         name(), t, law_.mu);
     return StepOutcome::Painleve;
   }
-  if (!d.allFinite()) {
+  if (!all_finite(d)) {
     message = fmt::format("non-finite state at t = {:.17g}", t + h);
     return StepOutcome::NonFinite;
   }

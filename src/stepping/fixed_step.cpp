@@ -205,7 +205,7 @@ RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_
     unconverged += r.unconverged;
     nonunique += r.nonunique;
     const double tr = init.t + static_cast<double>(r.index) * h;
-    if (!r.q.allFinite() || !r.v.allFinite()) {
+    if (!all_finite(r.q) || !all_finite(r.v)) {
       env_.fail(Termination::NonFinite, fmt::format("non-finite state at t = {:.17g}", tr));
       break;
     }

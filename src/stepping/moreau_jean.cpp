@@ -186,7 +186,7 @@ StepOutcome MoreauJean<N>::step(double t, StepReport& r, std::string& message) {
     change_ = vn - v;
     v = vn;
     ++r.newton_iters;
-    if (!v.allFinite()) {
+    if (!all_finite(v)) {
       message = fmt::format("mj: non-finite iterate at t = {:.17g}", t);
       return StepOutcome::NonFinite;
     }
@@ -212,7 +212,7 @@ StepOutcome MoreauJean<N>::step(double t, StepReport& r, std::string& message) {
       q += X_.col(0) * (-c.d_N / c.W_N.dot(X_.col(0)));
     }
   }
-  if (!q.allFinite() || !v.allFinite()) {
+  if (!all_finite(q) || !all_finite(v)) {
     message = fmt::format("non-finite state at t = {:.17g}", t + h);
     return StepOutcome::NonFinite;
   }

@@ -77,7 +77,10 @@ class RunEnvelope {
     if (c_.progress) c_.progress(t, event_count(), omega, phase);
   }
   /// The stop flag is set: the run ends (Termination::Interrupted) at t. True: stop now.
-  bool stop_requested(double t);
+  bool stop_requested(double t) {
+    if (!(c_.stop && c_.stop->load(std::memory_order_relaxed))) return false;  // (every step)
+    return interrupt(t);
+  }
   /// The wall-time budget is spent: the run ends (Termination::TimeBudget) at t. True: stop.
   bool budget_spent(double t);
   /// Ends the run with a typed termination (the first reason is kept).
@@ -88,6 +91,7 @@ class RunEnvelope {
   RunSummary finish(double t_reached, double energy_final, const RunWorks& w);
 
  private:
+  bool interrupt(double t);
   const RunControls& c_;
   OutputSink& sink_;
   RunMonitor mon_;

