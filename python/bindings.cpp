@@ -76,23 +76,20 @@ py::array_t<T> to_array(std::vector<T>&& v) {
   return a;
 }
 
-/// Samples as columns named as in timeseries.csv (the model's column table, io/columns.hpp);
-/// phase columns as their codes (Phase enum values).
-py::dict sample_columns(const LagrangianModel& model, const std::vector<Sample>& samples) {
-  const std::size_t n = samples.size();
+/// Samples as columns named as in timeseries.csv (io/columns.hpp's SeriesTable); phase columns
+/// as their codes (Phase enum values).
+py::dict series_dict(SeriesTable&& t) {
   py::dict d;
-  for (const SampleColumn& c : timeseries_columns(model)) {
-    if (c.field == SampleField::Phase) {
-      std::vector<std::int8_t> phase(n);
-      for (std::size_t i = 0; i < n; ++i)
-        phase[i] =
-            static_cast<std::int8_t>(samples[i].contacts[static_cast<std::size_t>(c.index)].phase);
-      d[py::str(c.name)] = to_array(std::move(phase));
-      continue;
+  for (std::size_t c = 0; c < t.columns.size(); ++c) {
+    const SampleColumn& sc = t.columns[c];
+    std::vector<double>& v = t.values[c];
+    if (sc.field == SampleField::Phase) {
+      std::vector<std::int8_t> phase(v.size());
+      for (std::size_t i = 0; i < v.size(); ++i) phase[i] = static_cast<std::int8_t>(v[i]);
+      d[py::str(sc.name)] = to_array(std::move(phase));
+    } else {
+      d[py::str(sc.name)] = to_array(std::move(v));
     }
-    std::vector<double> v(n);
-    for (std::size_t i = 0; i < n; ++i) v[i] = sample_value(samples[i], c);
-    d[py::str(c.name)] = to_array(std::move(v));
   }
   return d;
 }
@@ -183,7 +180,7 @@ py::tuple run_case(const Case& c, const py::object& progress, double progress_in
     throw py::error_already_set();
   }
   const std::unique_ptr<LagrangianModel> model = build_model(c.spec);
-  return py::make_tuple(sample_columns(*model, sink.samples),
+  return py::make_tuple(series_dict(series_table(*model, sink.samples)),
                         event_columns_of(sink.events, model->contact_count()),
                         summary_json(summary));
 }
@@ -442,22 +439,11 @@ PYBIND11_MODULE(_core, m) {
             throw py::value_error(e.what());
           }
         }
-        py::dict columns;
-        for (std::size_t c = 0; c < f.series.columns.size(); ++c) {
-          const SampleColumn& sc = f.series.columns[c];
-          std::vector<double>& v = f.series.values[c];
-          if (sc.field == SampleField::Phase) {
-            std::vector<std::int8_t> phase(v.size());
-            for (std::size_t i = 0; i < v.size(); ++i) phase[i] = static_cast<std::int8_t>(v[i]);
-            columns[py::str(sc.name)] = to_array(std::move(phase));
-          } else {
-            columns[py::str(sc.name)] = to_array(std::move(v));
-          }
-        }
-        const int contacts = build_model(f.spec)->contact_count();
+        const int contacts = f.model->contact_count();
         py::object summary = py::none();
         if (!f.summary_json.empty()) summary = py::str(f.summary_json);
-        return py::make_tuple(columns, event_columns_of(f.events, contacts), summary, f.warnings);
+        return py::make_tuple(series_dict(std::move(f.series)),
+                              event_columns_of(f.events, contacts), summary, f.warnings);
       },
       py::arg("dir"),
       "(columns, events, summary_json or None, warnings) of an output folder, read by the C++ "

@@ -5,6 +5,7 @@
 // gap's scale g0 = LagrangianModel::gap_scale(k); none is a free number of its own. The rest of
 // src/hybrid reads them from here (docs/architecture.md, "Decision tolerances").
 #include <algorithm>
+#include <limits>
 
 namespace rubdyn::detail {
 
@@ -64,7 +65,7 @@ inline constexpr double kFirstStepHorizon = 1e-3;
 /// 100: CVODE's error estimates carry a few eps |y| of noise; a hundred keeps them far below
 /// the test, and the demand (2e-14 relative) is still far beyond any measurement of a roll.
 inline constexpr double kRoundoffFloor = 100.0;
-inline constexpr double kEps = 2.220446049250313e-16;  // DBL_EPSILON
+inline constexpr double kEps = std::numeric_limits<double>::epsilon();
 
 /// The tolerances of one run, derived from the user's rtol, atol and the gap's scale g0.
 struct SwitchTolerances {

@@ -39,10 +39,6 @@ class Integrator {
         sink_(sink),
         law_(m.contact_law(0)),
         tol_(SwitchTolerances::derive(opt.rtol, opt.atol, m.gap_scale(0))),
-        g0_(tol_.g0),
-        atol_v_(tol_.atol_v),
-        v_tol_(tol_.v_tol),
-        graze_tol_(tol_.graze_tol),
         sw_(m, tol_),
         guard_(opt.max_events_per_second),
         sample_(n_, 1, static_cast<int>(m.observables().size())),
@@ -56,7 +52,7 @@ class Integrator {
         q_ev_(Vec::Zero(n_)),
         v_ev_(Vec::Zero(n_)),
         acc_(Vec::Zero(n_)) {
-    wit_.g0 = g0_;
+    wit_.g0 = tol_.g0;
     wit_.v_ref = tol_.v_ref;
     wit_.omega_lim = opt.omega_lim;
     omega_pending_ = opt.omega_lim > 0.0 && m.spin_coordinate() >= 0;
@@ -71,8 +67,8 @@ class Integrator {
     SessionSettings s;
     s.rtol = opt_.rtol;
     s.atol_q = opt_.atol;
-    s.atol_v = atol_v_;
-    s.g0 = g0_;
+    s.atol_v = tol_.atol_v;
+    s.g0 = tol_.g0;
     s.adams = opt_.adams;
     s.fixed_point = opt_.fixed_point;
     s.max_steps = opt_.max_steps_per_call;
@@ -104,7 +100,7 @@ class Integrator {
         // an arrival, and until the gap has opened beyond the position tolerance, contact onset
         // is d_N = -graze_tol (a penetration the integrator can resolve); the gap-rate witness
         // waits until v_N is above the velocity tolerance after every release (arm).
-        wit_.gap_offset = gap_banded_ ? graze_tol_ : 0.0;
+        wit_.gap_offset = gap_banded_ ? tol_.graze_tol : 0.0;
         wit_.add(Witness::Gap, -1);
         if (!gap_rate_deferred_) wit_.add(Witness::GapRate, +1);
         break;
@@ -157,8 +153,8 @@ class Integrator {
   void arm(double t, const Vec& q, const Vec& v) {
     m_.compute_contact(0, t, q, v, kin_);
     const ContactKinematics& c = kin_;
-    const bool rate = gap_rate_deferred_ && c.v_N > v_tol_;
-    const bool gap = gap_banded_ && c.d_N > graze_tol_;
+    const bool rate = gap_rate_deferred_ && c.v_N > tol_.v_tol;
+    const bool gap = gap_banded_ && c.d_N > tol_.graze_tol;
     if (!rate && !gap) return;
     gap_rate_deferred_ = gap_rate_deferred_ && !rate;
     gap_banded_ = gap_banded_ && !gap;
@@ -377,18 +373,18 @@ class Integrator {
     const ContactKinematics c0 = m_.contact(0, t, q, v);
     phase_ = Phase::Free;
     phase_start_ = t;
-    if (c0.d_N < -graze_tol_) {
+    if (c0.d_N < -tol_.graze_tol) {
       fail(Termination::SolverFailure,
            fmt::format("initial state penetrates the stator: d_N = {:.6g} m", c0.d_N));
       return false;
     }
-    if (!(c0.normal_defined && c0.d_N <= graze_tol_ && c0.v_N <= v_tol_)) {
+    if (!(c0.normal_defined && c0.d_N <= tol_.graze_tol && c0.v_N <= tol_.v_tol)) {
       start_phase(t, q, v);
       emit_sample(t, q_restart_, v_restart_);
       return true;
     }
     // starts in contact: impact if closing, else the contact problem decides
-    if (c0.v_N < -v_tol_) return arrive(t, q, v, "initial state on the constraint, closing");
+    if (c0.v_N < -tol_.v_tol) return arrive(t, q, v, "initial state on the constraint, closing");
     // (no sample before this event: the run starts in the phase the contact problem picks)
     EventRecord e;
     e.t = t;
@@ -404,7 +400,6 @@ class Integrator {
   const ContactLaw law_;
   std::optional<RunEnvelope> env_;  // the books of the run (core/run_envelope.hpp)
   const SwitchTolerances tol_;      // decision_tolerances.hpp
-  const double g0_, atol_v_, v_tol_, graze_tol_;
   ModeSwitcher sw_;
   EventGuard guard_;
   WitnessSet wit_;

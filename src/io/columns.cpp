@@ -91,6 +91,16 @@ void set_sample_value(Sample& s, const SampleColumn& c, double x) {
   }
 }
 
+SeriesTable series_table(const LagrangianModel& m, const std::vector<Sample>& samples) {
+  SeriesTable t;
+  t.columns = timeseries_columns(m);
+  t.values.assign(t.columns.size(), std::vector<double>(samples.size()));
+  for (std::size_t c = 0; c < t.columns.size(); ++c)
+    for (std::size_t i = 0; i < samples.size(); ++i)
+      t.values[c][i] = sample_value(samples[i], t.columns[c]);
+  return t;
+}
+
 bool parse_phase(std::string_view word, Phase& out) {
   for (int k = 0; k < kNumPhases; ++k) {
     if (word == to_string(static_cast<Phase>(k))) {

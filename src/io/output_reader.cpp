@@ -202,10 +202,10 @@ RunFiles read_run_files(const std::string& dir) {
   if (!fs::is_directory(dir)) throw std::runtime_error(dir + ": not an output folder");
   if (!fs::exists(case_path)) throw std::runtime_error(case_path + ": missing");
   r.spec = load_case(case_path);
-  const std::unique_ptr<LagrangianModel> model = build_model(r.spec);
-  r.series = read_series((fs::path(dir) / "timeseries.csv").string(), *model, r.warnings);
+  r.model = build_model(r.spec);
+  r.series = read_series((fs::path(dir) / "timeseries.csv").string(), *r.model, r.warnings);
   const std::string ev_path = (fs::path(dir) / "events.csv").string();
-  if (fs::exists(ev_path)) r.events = read_events(ev_path, model->contact_count(), r.warnings);
+  if (fs::exists(ev_path)) r.events = read_events(ev_path, r.model->contact_count(), r.warnings);
   const fs::path sj = fs::path(dir) / "summary.json";
   if (fs::exists(sj)) {
     std::ifstream in(sj.string());
@@ -223,7 +223,7 @@ RunRecord read_run(const std::string& dir) {
   r.events = static_cast<long>(f.events.size());
   r.complete = f.complete;
   r.warnings = std::move(f.warnings);
-  const std::unique_ptr<LagrangianModel> model = build_model(r.spec);
+  const LagrangianModel* model = f.model.get();
   const SeriesTable& t = f.series;
   const std::size_t n = t.rows();
   r.samples.assign(n, Sample(model->num_dofs(), model->contact_count(),

@@ -168,8 +168,7 @@ RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_
   // the applied loads' power; a rheonomic drive's depends on the accelerations and contact
   // forces: the scheme's (StepReport::a), and at the start the contact-free M^-1 f
   const bool rheonomic = m_.rheonomic();
-  auto external = [&](double t, const StepReport& r) {
-    if (!rheonomic) return m_.smooth_power(t, r.q, r.v).external;
+  auto rheonomic_power = [&](double t, const StepReport& r) {
     const ContactForce F{r.F_N, r.F_T};
     return m_.applied_power(t, r.q, r.v, r.a, &F);
   };
@@ -180,7 +179,7 @@ RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_
     reports[1].a = f.col(0);
   }
   SmoothPower p_prev = m_.smooth_power(init.t, init.q, init.v);
-  p_prev.external = external(init.t, reports[1]);
+  if (rheonomic) p_prev.external = rheonomic_power(init.t, reports[1]);
   long unconverged = 0, nonunique = 0;
   // two reports, used in turn: the last completed (finite) state stays in one of them while the
   // stepper writes the next into the other (no copy per step)
@@ -210,7 +209,7 @@ RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_
       break;
     }
     SmoothPower p = m_.smooth_power(tr, r.q, r.v);
-    if (rheonomic) p.external = external(tr, r);
+    if (rheonomic) p.external = rheonomic_power(tr, r);
     work_ext += 0.5 * (tr - t_prev) * (p_prev.external + p.external);
     work_damp += 0.5 * (tr - t_prev) * (p_prev.damping + p.damping);
     work_contact += r.contact_work;

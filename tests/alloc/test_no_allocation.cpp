@@ -4,7 +4,6 @@
 // while a run goes on: two runs of the same scene that differ only in their length, with no
 // event in the extra time, must allocate the same number of times. A separate program (not
 // under the sanitizers, which replace malloc themselves).
-#include <fmt/format.h>
 
 #include <atomic>
 #include <catch2/catch.hpp>
@@ -15,6 +14,7 @@
 #include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/model/rotor_stator_model.hpp"
 #include "rubdyn/stepping/fixed_step.hpp"
+#include "support/jeffcott_cases.hpp"
 #include "support/problems.hpp"
 
 extern "C" void* __libc_malloc(std::size_t);
@@ -175,28 +175,11 @@ TEST_CASE("No allocation per step: a 2-dof model (dynamic sizes) sliding, then s
   }
 }
 
-namespace {
-/// A Jeffcott case from its text: the model registry builds its model and initial state, as for
-/// a case file.
-CaseSpec jeffcott(const std::string& loads, const std::string& initial, const std::string& stator) {
-  return parse_case(
-      "name = \"alloc\"\n[model]\nkind = \"jeffcott\"\n"
-      "[rotor]\nmass = 5.0\nk = 5.0e6\nc = 300.0\nradius = 0.05\nJp = 0.06\n"
-      "[stator]\n" +
-          stator + "gap = 2.0e-4\n[contact]\nmu = 0.3\n[loads]\ngravity = 0.0\n" + loads +
-          "[initial]\n" + initial + "[run]\nt_end = 1.0\nomega_lim = 2000.0\n",
-      "alloc");
-}
-}  // namespace
-
 TEST_CASE("No allocation per step: the Jeffcott rotor rolling, and spun at a prescribed speed",
           "[alloc]") {
   // (1) rolling on a rigid ring at the steady spin tau / (c_r R^2) = 2666.67 rad/s: a stick
   // phase (the 3-dof chart) for the whole run
-  const double Om = 2000.0 / (300.0 * 0.05 * 0.05);
-  const CaseSpec rolling = jeffcott(
-      "torque = 2000.0\n", fmt::format("x_r = 2.0e-4\nvy_r = {}\nomega0 = {}\n", -0.05 * Om, Om),
-      "rigid = true\n");
+  const CaseSpec rolling = parse_case(rubdyn::testing::SteadyRoll::text(), "alloc");
   const auto roll = build_model(rolling);
   const MechanicalState r0 = initial_state(rolling);
   same_allocations(
@@ -220,8 +203,11 @@ TEST_CASE("No allocation per step: the Jeffcott rotor rolling, and spun at a pre
   }
   // (2) an unbalance whirling freely at a prescribed 800 rad/s (the wrapper without its spin
   // coordinate, the drive torque an observable), sprung stator: free flight
-  const CaseSpec spinning = jeffcott("spin = \"prescribed\"\nunbalance = 1e-4\n",
-                                     "omega0 = 800.0\n", "mass = 2.0\nk = 2.0e7\nc = 2500.0\n");
+  const CaseSpec spinning =
+      parse_case(rubdyn::testing::jeffcott_case("mass = 2.0\nk = 2.0e7\nc = 2500.0\n",
+                                                "spin = \"prescribed\"\nunbalance = 1e-4\n",
+                                                "omega0 = 800.0\n"),
+                 "alloc");
   const auto spun = build_model(spinning);
   const MechanicalState s0 = initial_state(spinning);
   same_allocations(

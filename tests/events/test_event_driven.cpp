@@ -1,5 +1,4 @@
 // The event-driven integrator on problems with exact solutions, and its invariants on the rotor.
-#include <fmt/format.h>
 
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -10,6 +9,7 @@
 #include "rubdyn/hybrid/event_driven.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/model/rotor_stator_model.hpp"
+#include "support/jeffcott_cases.hpp"
 #include "support/problems.hpp"
 
 using namespace rubdyn;
@@ -548,37 +548,9 @@ TEST_CASE("A long roll: the chart angle grows without bound and the run still co
   // rad here; before the round-off floor of the error weights (decision_tolerances.hpp) CVODE
   // stopped with CV_TOO_MUCH_ACC once eps |theta - theta_a| outgrew it: at 0.093 s (248 rad).
   // One second is 2667 rad.
-  const double tau = 2000.0, c = 300.0, R = 0.05, g0 = 2e-4;
-  const double Om = tau / (c * R * R);
-  const std::string text = fmt::format(R"(name = "long-roll"
-[model]
-kind = "jeffcott"
-[rotor]
-mass = 5.0
-k = 5.0e6
-c = {}
-radius = {}
-Jp = 0.06
-[stator]
-rigid = true
-gap = {}
-[contact]
-mu = 0.3
-[loads]
-gravity = 0.0
-torque = {}
-[initial]
-x_r = {}
-vy_r = {}
-omega0 = {}
-[run]
-t_end = 1.0
-omega_lim = 2000.0
-[solver]
-rtol = 1e-12
-atol = 1e-15
-)",
-                                       c, R, g0, tau, g0, -R * Om, Om);
+  using rubdyn::testing::SteadyRoll;
+  const double Om = SteadyRoll::omega;
+  const std::string text = SteadyRoll::text("[solver]\nrtol = 1e-12\natol = 1e-15\n");
   const CaseSpec spec = parse_case(text, "long-roll");
   MemorySink sink;
   const RunSummary s = simulate(spec, sink);

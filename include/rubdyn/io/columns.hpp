@@ -54,6 +54,17 @@ double sample_value(const Sample& s, const SampleColumn& c);
 /// phase's code (0 free .. 3 stick): std::invalid_argument otherwise.
 void set_sample_value(Sample& s, const SampleColumn& c, double x);
 
+/// Samples as columns: the model's column table and each column's values in sample order (a
+/// phase column: the Phase codes). What the reader makes of timeseries.csv, and what the Python
+/// bindings hand to numpy.
+struct SeriesTable {
+  std::vector<SampleColumn> columns;
+  std::vector<std::vector<double>> values;  ///< values[c][row]
+  std::size_t rows() const { return values.empty() ? 0 : values.front().size(); }
+};
+/// The samples of a run of `m` as a SeriesTable.
+SeriesTable series_table(const LagrangianModel& m, const std::vector<Sample>& samples);
+
 /// What an events column holds.
 enum class EventField { Time, Kind, PhaseBefore, PhaseAfter, Number, Text, Contact };
 

@@ -4,6 +4,7 @@
 // and the library all read through it, with the same tolerance for what a killed run leaves:
 // a last row without its line end is dropped with a warning, an empty events.csv reads as no
 // events, a missing or incomplete summary.json marks the run incomplete.
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -34,22 +35,15 @@ CsvTable read_csv(const std::string& path, bool empty_ok = false);
 /// A whole field as a number (strtod; false for an empty field or trailing text).
 bool parse_number(const std::string& field, double& x);
 
-/// timeseries.csv as columns: the model's column table (io/columns.hpp) and each column's
-/// values in file order (a phase column: the Phase codes). Columns are found by name; a column
-/// of the table that the file lacks is an error, a column the table lacks is ignored.
-struct SeriesTable {
-  std::vector<SampleColumn> columns;
-  std::vector<std::vector<double>> values;  ///< values[c][row]
-  std::size_t rows() const { return values.empty() ? 0 : values.front().size(); }
-};
-
 /// An output folder read back whole: the case it ran, the samples as columns, the events, the
 /// summary as written. The one reader of output folders: read_run (the analyses) and the Python
 /// package (rubdyn.read) both read through it.
 struct RunFiles {
   std::string dir;
-  CaseSpec spec;                      ///< case.resolved.toml
-  SeriesTable series;                 ///< timeseries.csv
+  CaseSpec spec;                                 ///< case.resolved.toml
+  std::shared_ptr<const LagrangianModel> model;  ///< built from spec: its column tables
+  SeriesTable series;                 ///< timeseries.csv, by name (a column of the table that
+                                      ///< the file lacks is an error, others are ignored)
   std::vector<EventRecord> events;    ///< events.csv (none if absent or header-only)
   std::string summary_json;           ///< summary.json as written (empty: absent)
   bool complete = true;               ///< summary.json "complete" (false: ended early or absent)
