@@ -46,6 +46,14 @@ void check(int flag, const char* what) {
 // Measured on the rolling regime (mu = 0.25, 0.5 s): 2.8 -> 1.05 us per step.
 namespace small {
 
+// The loops below are element-wise: z[i] depends on x[i], y[i] only. CVODE calls them on
+// vectors that are either distinct allocations or the very same vector (the Nordsieck predictor
+// adds in place, z == x), never on partly overlapping ones; either way a vectorised loop computes
+// the same numbers (the same IEEE operation per element, no reassociation). Without the hint the
+// compiler guards its vector loop by an overlap test that the in-place case fails, and the
+// predictor's additions ran the scalar loop (callgrind, mu = 0.25 rolling regime).
+#define RUBDYN_ELEMENTWISE _Pragma("GCC ivdep")
+
 inline double* data(N_Vector v) {
   return NV_DATA_S(v);
 }
@@ -58,16 +66,22 @@ void linear_sum(realtype a, N_Vector x, realtype b, N_Vector y, N_Vector z) {
   double* zd = data(z);
   const sunindextype n = size(x);
   if (a == 1.0 && b == 1.0) {
+    RUBDYN_ELEMENTWISE
     for (sunindextype i = 0; i < n; ++i) zd[i] = xd[i] + yd[i];
   } else if (a == 1.0 && b == -1.0) {
+    RUBDYN_ELEMENTWISE
     for (sunindextype i = 0; i < n; ++i) zd[i] = xd[i] - yd[i];
   } else if (a == -1.0 && b == 1.0) {
+    RUBDYN_ELEMENTWISE
     for (sunindextype i = 0; i < n; ++i) zd[i] = yd[i] - xd[i];
   } else if (a == 1.0) {
+    RUBDYN_ELEMENTWISE
     for (sunindextype i = 0; i < n; ++i) zd[i] = xd[i] + b * yd[i];
   } else if (b == 1.0) {
+    RUBDYN_ELEMENTWISE
     for (sunindextype i = 0; i < n; ++i) zd[i] = a * xd[i] + yd[i];
   } else {
+    RUBDYN_ELEMENTWISE
     for (sunindextype i = 0; i < n; ++i) zd[i] = a * xd[i] + b * yd[i];
   }
 }
@@ -76,6 +90,7 @@ void scale(realtype c, N_Vector x, N_Vector z) {
   const double* xd = data(x);
   double* zd = data(z);
   const sunindextype n = size(x);
+  RUBDYN_ELEMENTWISE
   for (sunindextype i = 0; i < n; ++i) zd[i] = c * xd[i];
 }
 
@@ -119,6 +134,7 @@ int scale_add_multi(int nv, realtype* c, N_Vector x, N_Vector* Y, N_Vector* Z) {
   for (int j = 0; j < nv; ++j) {
     const double* yd = data(Y[j]);
     double* zd = data(Z[j]);
+    RUBDYN_ELEMENTWISE
     for (sunindextype i = 0; i < n; ++i) zd[i] = c[j] * xd[i] + yd[i];
   }
   return 0;
