@@ -5,7 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DRUBDYN_TEST_ONLY= > /dev/null
+bash scripts/configure.sh build   # the flags scripts/test.sh uses: one build for both
 cmake --build build -j2 --target rubdyn
 ./build/rubdyn check cases/reference.toml
 ./build/rubdyn campbell cases/reference.toml --out out/reference

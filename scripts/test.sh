@@ -8,14 +8,14 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 build=build
-flags=(-DCMAKE_BUILD_TYPE=Release)
+flags=()  # scripts/configure.sh's Release flags, the ones scripts/run-reference.sh builds with
 if [ "${1:-}" = "--sanitize" ]; then
   build=build-asan
   flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DRUBDYN_SANITIZE=ON)
 fi
 
 bash scripts/install-deps.sh
-cmake -S . -B "$build" "${flags[@]}" -DRUBDYN_TEST_ONLY= -DRUBDYN_WARNINGS_AS_ERRORS=ON > /dev/null
+bash scripts/configure.sh "$build" "${flags[@]}"
 cmake --build "$build" -j2
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
