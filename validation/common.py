@@ -142,6 +142,8 @@ class Run:
         self.t = np.array([num(r["t"]) for r in ts])
         self.x = np.array([num(r["x_r"]) for r in ts])
         self.y = np.array([num(r["y_r"]) for r in ts])
+        self.vx = np.array([num(r["vx_r"]) for r in ts])
+        self.vy = np.array([num(r["vy_r"]) for r in ts])
         self.omega = np.array([num(r["omega"]) for r in ts])
         self.v_t = np.array([num(r["v_t"]) for r in ts])
         self.dN = np.array([num(r["d_N"]) for r in ts])
@@ -202,6 +204,31 @@ def spectrogram(run, window=0.08, overlap=0.5, pad=4):
         tc.append(t[i0:i0 + n].mean())
         oc.append(om[i0:i0 + n].mean())
     return np.array(tc), np.array(oc), f, np.array(amp)
+
+
+# A frame is undersampled when its whirl frequency scale exceeds this fraction of the Nyquist
+# frequency (as rubdyn analyze: kUndersampledFraction in include/rubdyn/analysis/postprocess.hpp)
+UNDERSAMPLED_FRACTION = 0.5
+
+
+def whirl_scale(run, window=0.08, overlap=0.5):
+    """For the frames of spectrogram(run, window, overlap): the whirl frequency scale
+    max |z'| / (2 pi max |z - mean z|) [Hz] of each frame, from the velocities (states, exact at
+    the samples: they see a whirl however fast), and the Nyquist frequency 1 / (2 dt) of the
+    samples. Exact for a circular whirl; above the Nyquist frequency it proves content that the
+    samples alias (Bernstein's inequality). Returns (f_whirl per frame, f_nyquist); a frame is
+    undersampled when f_whirl > UNDERSAMPLED_FRACTION f_nyquist."""
+    keep = np.concatenate([[True], np.diff(run.t) > 1e-12])
+    t, z, vz = run.t[keep], (run.x + 1j * run.y)[keep], (run.vx + 1j * run.vy)[keep]
+    dt = np.median(np.diff(t))
+    n = int(round(window / dt))
+    step = max(1, int(round(n * (1 - overlap))))
+    fw = []
+    for i0 in range(0, len(t) - n + 1, step):
+        seg, vseg = z[i0:i0 + n], vz[i0:i0 + n]
+        rmax, vmax = np.abs(seg - seg.mean()).max(), np.abs(vseg).max()
+        fw.append(0.0 if vmax == 0 else (vmax / (2 * np.pi * rmax) if rmax > 0 else np.inf))
+    return np.array(fw), 0.5 / dt
 
 
 class Campbell:

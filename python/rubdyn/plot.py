@@ -342,6 +342,17 @@ def spectrogram(analysis_dir, f_max=None):
             ax.plot(c["t"], c[name], ls=style, color=color, lw=1.6,
                     path_effects=[pe.Stroke(linewidth=3.2, foreground="white"), pe.Normal()],
                     label=f"Campbell {name} ({'forward' if name.endswith('f') else 'backward'})")
+        if "undersampled" in (c.dtype.names or ()):
+            # frames whose samples alias the orbit's whirl (rolling whirls at R_r / g0 times the
+            # spin): hatched, so that no one reads their stripes as spectrum
+            bad = np.atleast_1d(c["undersampled"]) > 0.5
+            tc = np.atleast_1d(c["t"])
+            half = 0.5 * (tc[1] - tc[0]) if len(tc) > 1 else 0.0
+            for i, k in enumerate(np.flatnonzero(bad)):
+                ax.axvspan(tc[k] - half, tc[k] + half, facecolor="0.85", alpha=0.85, hatch="//",
+                           edgecolor="0.4", lw=0, label=None if i else
+                           "undersampled: the whirl (up to %.3g kHz) aliases; a smaller "
+                           "output.dt reads it" % (np.atleast_1d(c["f_whirl"])[bad].max() / 1e3))
         ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2, fontsize=8,
                   frameon=False)
     if f_max is not None:

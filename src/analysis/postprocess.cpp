@@ -85,6 +85,7 @@ std::pair<double, double> window_of(const RunRecord& r, const AnalysisOptions& o
 struct Uniform {
   double t0 = 0, dt = 0;
   std::vector<std::complex<double>> z;
+  std::vector<std::complex<double>> vz;  ///< dz/dt: a state, exact at the samples (no aliasing)
   std::vector<double> omega;
 };
 Uniform resample(const RunRecord& r, double t0, double t1) {
@@ -104,6 +105,7 @@ Uniform resample(const RunRecord& r, double t0, double t1) {
   u.dt = static_cast<double>(mode->first) * 1e-12;
   const long n = static_cast<long>(std::floor((t1 - t0) / u.dt * (1 + 1e-12))) + 1;
   u.z.resize(n);
+  u.vz.resize(n);
   u.omega.resize(n);
   size_t j = 0;
   for (long k = 0; k < n; ++k) {
@@ -114,10 +116,31 @@ Uniform resample(const RunRecord& r, double t0, double t1) {
     const double w = b.t > a.t ? std::clamp((t - a.t) / (b.t - a.t), 0.0, 1.0) : 0.0;
     u.z[k] = {a.q[pc.rotor_x] + w * (b.q[pc.rotor_x] - a.q[pc.rotor_x]),
               a.q[pc.rotor_y] + w * (b.q[pc.rotor_y] - a.q[pc.rotor_y])};
+    u.vz[k] = {a.v[pc.rotor_x] + w * (b.v[pc.rotor_x] - a.v[pc.rotor_x]),
+               a.v[pc.rotor_y] + w * (b.v[pc.rotor_y] - a.v[pc.rotor_y])};
     const double wa = model->spin(a.t, a.q, a.v), wb = model->spin(b.t, b.q, b.v);
     u.omega[k] = wa + w * (wb - wa);
   }
   return u;
+}
+
+// The frame's whirl frequency scale max |z'| / (2 pi max |z - mean z|), from the velocities (states
+// the solver computed, not differences of samples, so it sees a whirl however fast): exactly f0
+// for a circular whirl a e^{i 2 pi f0 t}, and by Bernstein's inequality a signal band-limited
+// to B has max |z'| <= 2 pi B max |z - c| for its centre c, so a scale above the Nyquist
+// frequency proves content that the samples alias. 0 for a frame at rest, infinite for one that
+// moves without leaving its mean (nothing to measure the whirl against).
+double whirl_frequency_scale(const Uniform& u, long first, long len) {
+  std::complex<double> mean = 0.0;
+  for (long k = first; k < first + len; ++k) mean += u.z[k];
+  mean /= static_cast<double>(len);
+  double rmax = 0.0, vmax = 0.0;
+  for (long k = first; k < first + len; ++k) {
+    rmax = std::max(rmax, std::abs(u.z[k] - mean));
+    vmax = std::max(vmax, std::abs(u.vz[k]));
+  }
+  if (vmax == 0.0) return 0.0;  // at rest: nothing to alias
+  return rmax > 0.0 ? vmax / (2.0 * M_PI * rmax) : std::numeric_limits<double>::infinity();
 }
 
 // Hann-windowed, zero-padded FFT of z[first, first + len): amplitudes on ascending frequencies
@@ -320,6 +343,7 @@ Spectrogram spectrogram(const RunRecord& r, const AnalysisOptions& o) {
       g.campbell_labels.push_back(fmt::format("f{}b", k));
     g.campbell.assign(g.campbell_labels.size(), {});
   }
+  g.f_nyquist = 0.5 / u.dt;
   std::vector<double> amp;
   for (long first = 0; first + len <= n; first += hop) {
     windowed_fft(u.z, first, len, o.pad, u.dt, o.f_max, g.f, amp);
@@ -329,6 +353,9 @@ Spectrogram spectrogram(const RunRecord& r, const AnalysisOptions& o) {
     g.t.push_back(u.t0 + (static_cast<double>(first) + 0.5 * static_cast<double>(len - 1)) * u.dt);
     g.omega.push_back(om);
     g.amplitude.push_back(amp);
+    const double fw = whirl_frequency_scale(u, first, len);
+    g.f_whirl.push_back(fw);
+    g.undersampled.push_back(!(fw <= kUndersampledFraction * g.f_nyquist));
     if (campbell) {
       // forward frequencies, then backward ones at negative frequency
       const CampbellPoint c = campbell->solve(om);
@@ -431,11 +458,12 @@ RunVerdicts write_analysis(const RunRecord& r, const AnalysisOptions& o,
       fmt::format_to(out, "{},{},{}\n", sg.t[i], sg.f[k], sg.amplitude[i][k]);
   write_file_atomic((fs::path(dir) / "spectrogram.csv").string(), fmt::to_string(b));
   b.clear();
-  fmt::format_to(out, "t,omega");
+  fmt::format_to(out, "t,omega,f_whirl,undersampled");
   for (const auto& l : sg.campbell_labels) fmt::format_to(out, ",{}", l);
   fmt::format_to(out, "\n");
   for (size_t i = 0; i < sg.t.size(); ++i) {
-    fmt::format_to(out, "{},{}", sg.t[i], sg.omega[i]);
+    fmt::format_to(out, "{},{},{},{}", sg.t[i], sg.omega[i], sg.f_whirl[i],
+                   sg.undersampled[i] ? 1 : 0);
     for (const auto& col : sg.campbell) fmt::format_to(out, ",{}", col[i]);
     fmt::format_to(out, "\n");
   }
@@ -443,6 +471,24 @@ RunVerdicts write_analysis(const RunRecord& r, const AnalysisOptions& o,
   std::string json = verdicts_json(v);
   json.insert(json.size() - 3, fmt::format(",\n  \"spectrogram\": \"{}\"",
                                            sg_note.empty() ? "written" : "skipped: " + sg_note));
+  if (sg_note.empty()) {
+    // the frames whose samples alias the orbit's whirl (campbell.csv: f_whirl, undersampled)
+    long bad = 0;
+    for (const char u : sg.undersampled) bad += u ? 1 : 0;
+    std::string spans;
+    for (size_t i = 0; i < sg.t.size(); ++i) {
+      if (!sg.undersampled[i] || (i > 0 && sg.undersampled[i - 1])) continue;
+      size_t j = i;
+      while (j + 1 < sg.t.size() && sg.undersampled[j + 1]) ++j;
+      spans += fmt::format("{}[{}, {}]", spans.empty() ? "" : ", ", num_json(sg.t[i]),
+                           num_json(sg.t[j]));
+    }
+    json.insert(json.size() - 3,
+                fmt::format(",\n  \"spectrogram_nyquist_hz\": {},\n  \"spectrogram_frames\": "
+                            "{},\n  \"spectrogram_undersampled_frames\": {},\n  "
+                            "\"spectrogram_undersampled_spans\": [{}]",
+                            num_json(sg.f_nyquist), sg.t.size(), bad, spans));
+  }
   write_file_atomic((fs::path(dir) / "analysis.json").string(), json);
   return v;
 }

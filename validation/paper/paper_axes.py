@@ -15,7 +15,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from common import Campbell, Run, run_analyzed, spectrogram, sweep  # noqa: E402
+from common import (UNDERSAMPLED_FRACTION, Campbell, Run, run_analyzed, spectrogram,  # noqa: E402
+                    sweep, whirl_scale)
 
 T_LIM_TREF = 0.76
 T_RUN_TREF = 1.6
@@ -85,8 +86,15 @@ def figure_set(rubdyn, case, out, figdir, quick=False):
     save(fig, "fig06-07.png")
 
     # Fig. 9a-c: spectrograms mu = 0, 0.1 and the longer mu = 0.25 run
+    # In rolling the orbit whirls at R_r / g0 times the spin (250 x: 84 kHz at Omega_lim), far
+    # above the Nyquist frequency of output.dt = 1e-4 (5 kHz): sampled there, every rolling
+    # frame aliases into broadband stripes. This run is written every DT_ROLL: Nyquist frequency
+    # 2 x the fastest whirl, so the spectrogram reads through the rolling phase.
+    whirl_max = spec["rotor"]["radius"] / g0 * 1.05 * oml / (2 * np.pi)
+    dt_roll = 1.0 / (4.0 * whirl_max)
     long25 = Run(run_analyzed(rubdyn, case, os.path.join(out, "mu0.25-long"),
-                              (1 if quick else T_LONG_TREF) * tref, ["contact.mu=0.25"]))
+                              (1 if quick else T_LONG_TREF) * tref,
+                              ["contact.mu=0.25", "output.dt=%.3g" % dt_roll]))
     fmax = 1.15 * max(cb("f2f", oml), cb("f2b", 0))
     for tag, rr in (("a-mu0", runs[0.0]), ("b-mu0.1", runs[0.1]), ("c-mu0.25-long", long25)):
         spectrogram_panel(rr, cb, tref, fmax, "Fig. 9%s (%s)" % (tag, name),
@@ -197,12 +205,24 @@ def dn(run, g0):
 def spectrogram_panel(run, cb, tref, fmax, title, path, marks=()):
     """marks: vertical lines (t [s], colour, line style, label) drawn on top."""
     tc, oc, f, a = spectrogram(run)
+    fw, fnyq = whirl_scale(run)
     keep = np.abs(f) <= fmax
     fig, ax = plt.subplots(figsize=(9, 6))
     db = 20 * np.log10(a[:, keep].T + 1e-16)
     im = ax.pcolormesh(tc / tref, f[keep], db, shading="auto", cmap="viridis",
                        vmin=db.max() - 80)
     fig.colorbar(im, ax=ax, label="amplitude [dB re 1 m]")
+    # frames whose samples alias the orbit's whirl (rolling whirls at R_r / g0 times the spin):
+    # hatched, so that no one reads their stripes as spectrum
+    bad = fw > UNDERSAMPLED_FRACTION * fnyq
+    if bad.any():
+        half = 0.5 * (tc[1] - tc[0]) if len(tc) > 1 else 0.0
+        for k in np.flatnonzero(bad):
+            ax.axvspan((tc[k] - half) / tref, (tc[k] + half) / tref, facecolor="0.85", alpha=0.85,
+                       hatch="//", edgecolor="0.4", lw=0,
+                       label=None if k != np.flatnonzero(bad)[0] else
+                       "undersampled: whirl up to %.3g kHz > Nyquist/2 = %.3g kHz"
+                       % (fw[bad].max() / 1e3, 0.5 * fnyq / 1e3))
     for nm, style, sign in (("f1f", "w--", 1), ("f2f", "r--", 1), ("f1b", "w-", -1),
                             ("f2b", "r-", -1)):
         ax.plot(tc / tref, sign * cb(nm, oc), style, lw=0.8, label=nm)

@@ -173,6 +173,16 @@ def spectrogram_figure(folder, png, title, findings, onset):
                        cmap="viridis", vmin=20 * np.log10(a.max() + 1e-16) - 80)
     fig.colorbar(im, ax=ax, label="amplitude [dB re 1 m]")
     tc = col(cb, "t")
+    # frames whose samples alias the orbit's whirl (rubdyn analyze: campbell.csv's undersampled,
+    # f_whirl): hatched, so that no one reads their stripes as spectrum
+    bad = col(cb, "undersampled") > 0.5
+    if bad.any():
+        half = 0.5 * (tc[1] - tc[0]) if len(tc) > 1 else 0.0
+        first = np.flatnonzero(bad)[0]
+        for k in np.flatnonzero(bad):
+            ax.axvspan(tc[k] - half, tc[k] + half, facecolor="0.85", alpha=0.85, hatch="//",
+                       edgecolor="0.4", lw=0, label=None if k != first else
+                       "undersampled (whirl up to %.3g kHz)" % (col(cb, "f_whirl")[bad].max() / 1e3))
     for name, style in [("f1f", "w--"), ("f1b", "w-"), ("f2f", "r--"), ("f2b", "r-")]:
         ax.plot(tc, col(cb, name), style, lw=0.8, label=name + " (Campbell)")
     ax.set_xlabel("t [s]")

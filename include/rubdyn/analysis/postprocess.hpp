@@ -120,7 +120,21 @@ struct Spectrogram {
   /// none when the model has no such linearisation.
   std::vector<std::string> campbell_labels;
   std::vector<std::vector<double>> campbell;
+  /// Aliasing: the samples' Nyquist frequency 1 / (2 dt) [Hz]; per frame the whirl frequency
+  /// scale max |z'| / (2 pi max |z - mean z|) [Hz] from the velocities (exact for a circular
+  /// whirl; above the Nyquist frequency it proves content the samples alias, by Bernstein's
+  /// inequality), and the frame marked undersampled when that scale exceeds
+  /// kUndersampledFraction of the Nyquist frequency. In rolling the orbit whirls at R_r / g0
+  /// times the spin: at output.dt = 1e-4 every rolling frame is undersampled.
+  double f_nyquist = 0.0;
+  std::vector<double> f_whirl;
+  std::vector<char> undersampled;
 };
+
+/// A frame is undersampled when its whirl frequency scale exceeds this fraction of the Nyquist
+/// frequency: a margin of 2 for frames that mix whirls (the scale of a mixture can sit below
+/// its fastest component).
+inline constexpr double kUndersampledFraction = 0.5;
 
 std::vector<DerivedSample> derive(const RunRecord& r);
 /// Also marks d[i].sustained.
