@@ -355,16 +355,7 @@ def stage3(case, lines, t_end, sep, kept, tref):
               "at the bottom of the clearance early on." % (
                   pk[0.0], pk[0.1], pk100[0.0], pk100[0.1], f_rock)]
     # frictionless separation: the statics of eq. (12)-(16) without contact
-    lines += ["- **Separation at mu = 0.** The lateral stiffness of eq. (16) acts on x_b, y_b "
-              "(k_b, eq. 12) and x_s, y_s (k_s, eq. 15) only: the rotor node (x_r, y_r) has none, "
-              "while gravity loads it (-nu m g on y_r, eq. 14). K q = f_ext has no lateral "
-              "solution without a contact force: the rotor has no equilibrium off the stator (it "
-              "pivots freely about the translational bearing B). A lasting separation would need "
-              "a free whirl that nothing feeds at mu = 0 (no unbalance, no friction) while c_b "
-              "and c_s damp it, and every stage-2 point is in contact %.0f-%.0f %% of the time "
-              "after 0.9 t_ref at mu = 0 (column T6). The paper's 'contact separation for "
-              "t > 0.85 t_ref' at mu = 0 cannot be a lasting state of the model it prints; a "
-              "stretch of bouncing contact is the most this model can give." % sep]
+    lines += [("- **Separation at mu = 0.** The lateral stiffness of eq. (16) acts on x_b, y_b (k_b, eq. 12) and x_s, y_s (k_s, eq. 15) only: the rotor node (x_r, y_r) has none, while gravity loads it (-nu m g on y_r, eq. 14), so the rotor has no static equilibrium off the stator. An earlier version of this note concluded from that that it cannot lift off at mu = 0. That argument is static, and it is wrong. A spinning rotor does not rest: the gyroscopic coupling (G, eq. 13) turns the load on R into a drift perpendicular to it, so the rotor precesses along the ring instead of sitting at its bottom. The inertia of that precession can exceed what gravity presses into the contact, and then the normal force falls to zero and the rotor lifts off. How much it separates depends on the gyroscopic coupling (Jp) against the load (gravity). `validation/calibration/separation.py` measures it on the reference case at mu = 0 over 1 s ([separation.md](separation.md)):\n  - as it is (Jp = 0.06), in contact 100 %% of the time after 0.5 s;\n  - with Jp = 0.3 and Jd = 0.151, 54 %%, with lift-offs until 0.946 s;\n  - adding gravity 2 m/s^2, 26 %%;\n  - with Jp = 0.15, Jd = 0.076 and gravity 2 m/s^2, 39 %%, with lift-offs until 0.996 s.\n  At every stage-2 point (Jp, Jd fixed by stage 1) the rotor is in contact %.0f-%.0f %% of the time after 0.9 t_ref at mu = 0 (column T6). So stage 1, which fixes Jd, Jp and k_b from the Campbell targets, may have closed the door to the paper's 'contact separation for t > 0.85 t_ref'. The model itself does not. A second fit that frees those parameters is the next step (issue 23).") % sep]
 
 
 def main():
