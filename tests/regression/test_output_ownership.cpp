@@ -119,7 +119,7 @@ TEST_CASE("Output paths: compare --json writes through a link to the standard ou
   fs::remove_all(d);
 }
 
-TEST_CASE("Output paths: a link is written through, never replaced; a link to nothing refused",
+TEST_CASE("Output paths: a link is written through, never replaced, a link to nothing refused",
           "[ownership][cli]") {
   const fs::path d = fresh_dir("json-link");
   fs::create_directories(d);
@@ -318,7 +318,7 @@ TEST_CASE("Owned folders: a case named .. is refused instead of writing into the
 
 // --- sweeps: the sweep's folder, shards, merge -----------------------------------------------
 
-TEST_CASE("Sweeps: the sweep folder is locked; a second sweep and a merge meanwhile are refused",
+TEST_CASE("Sweeps: the sweep folder is locked, a second sweep and a merge meanwhile are refused",
           "[ownership][cli]") {
   const fs::path d = fresh_dir("sweep-lock");
   const Background b = start("sweep " + sh(kRef) + " --vary contact.mu=0.1 --t-end 50 --jobs 1 " +
