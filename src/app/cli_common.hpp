@@ -27,6 +27,16 @@ inline void add_case_options(CLI::App& sub, CaseArgs& a) {
       ->allow_extra_args(false);
 }
 
+/// Refuses an empty path (an unset shell variable) for an option that names a folder or file,
+/// instead of falling back to the default in silence: a usage error, exit 2.
+inline CLI::Validator non_empty_path() {
+  return CLI::Validator(
+      [](std::string& v) {
+        return v.empty() ? std::string("an empty path (an unset variable?)") : std::string();
+      },
+      "", "non-empty path");
+}
+
 /// The flag raised by SIGINT and SIGTERM (a lock-free atomic: safe to set in a handler).
 inline std::atomic<bool>& stop_flag() {
   static std::atomic<bool> flag{false};

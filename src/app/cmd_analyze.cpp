@@ -4,6 +4,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "cli_common.hpp"
 #include "commands.hpp"
 #include "rubdyn/analysis/postprocess.hpp"
 
@@ -46,7 +47,8 @@ void add_analyze_command(CLI::App& app, Action& action) {
   auto* sub = app.add_subcommand(
       "analyze", "Whirl, friction torque, spectrum and spectrogram of an output folder");
   sub->add_option("folder", a->folder, "output folder of rubdyn run")->required();
-  sub->add_option("--out", a->out, "where to write (default FOLDER/analysis)");
+  sub->add_option("--out", a->out, "where to write (default FOLDER/analysis)")
+      ->check(non_empty_path());
   sub->add_option("--t-window", a->window_t, "analyse [t0, t1] only")->expected(2);
   sub->add_option("--window", a->o.window, "spectrogram frame length [s] (default 0.04)");
   sub->add_option("--overlap", a->o.overlap, "spectrogram frame overlap in [0, 1) (0.75)");

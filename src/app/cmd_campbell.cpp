@@ -113,7 +113,8 @@ void add_campbell_command(CLI::App& app, Action& action) {
       "Campbell diagram of the coupled rotor-stator system (paper, section 5.1.2): the four "
       "whirl-labelled frequencies f1b, f1f, f2b, f2f versus the spin speed, to DIR/campbell.csv");
   add_case_options(*sub, a->c);
-  sub->add_option("--out", a->out, "output folder DIR (default: the case's output folder)");
+  sub->add_option("--out", a->out, "output folder DIR (default: the case's output folder)")
+      ->check(non_empty_path());
   sub->add_option("--points", a->points, "number of speeds from 0 to omega-max, in [2, 100000]")
       ->capture_default_str();
   auto* om = sub->add_option("--omega-max", a->omega_max,

@@ -111,11 +111,13 @@ int run_command(const RunArgs& a) {
   // a path is a string as given, never TOML text ('run\new' is not run<newline>ew)
   if (a.out) sets.push_back("output.folder=" + toml_quote(*a.out));
   std::vector<CaseIssue> bad;
+  if (a.out && a.out->empty())  // an unset variable: not the case's default folder in silence
+    bad.push_back({"command line", 0, "--out", "", "an empty path is no output folder"});
   CaseSpec spec;
   try {
     spec = load_case(a.c.path, sets);
   } catch (const CaseError& e) {
-    bad = e.issues();
+    bad.insert(bad.end(), e.issues().begin(), e.issues().end());
   }
   // an option the chosen solver does not read would be silently ignored: refused (the
   // solver registry says which keys each solver reads)

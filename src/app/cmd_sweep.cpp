@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 
@@ -11,6 +12,7 @@
 #include "commands.hpp"
 #include "rubdyn/core/run_types.hpp"
 #include "rubdyn/driver/sweep.hpp"
+#include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/solver_options.hpp"
 
 namespace rubdyn::app {
@@ -20,7 +22,9 @@ namespace {
 struct SweepArgs {
   CaseArgs c;
   std::vector<std::string> vary;
-  std::string out = "out/sweep", shard, solver, rtol, atol, h, t_end;
+  std::string out = "out/sweep";
+  // unset when not given: an empty value (an unset shell variable) is given, and refused
+  std::optional<std::string> shard, solver, rtol, atol, h, t_end;
   int jobs = 0;
   long max_points = kDefaultMaxPoints;
   bool certify = false, quiet = false, resume = false;
@@ -32,14 +36,15 @@ int sweep_command(const SweepArgs& a) {
   SweepOptions o;
   o.case_path = a.c.path;
   o.sets = a.c.sets;
-  if (!a.solver.empty()) o.sets.push_back("solver.kind=" + a.solver);
-  if (!a.rtol.empty()) o.sets.push_back("solver.rtol=" + a.rtol);
-  if (!a.atol.empty()) o.sets.push_back("solver.atol=" + a.atol);
-  if (!a.h.empty()) o.sets.push_back("solver.h=" + a.h);
-  if (!a.t_end.empty()) o.sets.push_back("run.t_end=" + a.t_end);
+  if (a.solver) o.sets.push_back("solver.kind=" + toml_quote(*a.solver));
+  if (a.rtol) o.sets.push_back("solver.rtol=" + *a.rtol);
+  if (a.atol) o.sets.push_back("solver.atol=" + *a.atol);
+  if (a.h) o.sets.push_back("solver.h=" + *a.h);
+  if (a.t_end) o.sets.push_back("run.t_end=" + *a.t_end);
   for (const auto& v : a.vary) o.vary.push_back(parse_variation(v));
   if (o.vary.empty()) throw std::runtime_error("sweep: give at least one --vary");
-  if (!a.shard.empty()) o.shard = parse_shard(a.shard);
+  if (a.shard) o.shard = parse_shard(*a.shard);  // '' refused: it would run every point
+  if (a.out.empty()) throw std::invalid_argument("--out '': an empty path is no sweep folder");
   if (a.jobs < 0) throw std::runtime_error("--jobs must be >= 0 (0: all cores)");
   o.jobs =
       a.jobs > 0 ? a.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -53,8 +58,8 @@ int sweep_command(const SweepArgs& a) {
   o.plan = [](const SweepPlan& p) {
     std::printf(
         "plan          %ld points; this run: %ld runs, %.6g s simulated, about %.3g "
-        "output rows (%.3g MB)\n",
-        p.points, p.runs, p.simulated_seconds, p.output_rows, p.output_bytes / 1e6);
+        "output rows (%.3g MB); plan %s\n",
+        p.points, p.runs, p.simulated_seconds, p.output_rows, p.output_bytes / 1e6, p.hash.c_str());
     std::fflush(stdout);
   };
   const bool tty = !a.quiet && isatty(fileno(stderr));
@@ -89,8 +94,8 @@ int sweep_command(const SweepArgs& a) {
     }
   }
   std::printf("sweep         %ld points run (%s), %ld ended early",
-              static_cast<long>(rows.size()) - not_run, o.shard.count > 1 ? a.shard.c_str() : "all",
-              bad);
+              static_cast<long>(rows.size()) - not_run,
+              o.shard.count > 1 ? a.shard->c_str() : "all", bad);
   if (not_run > 0) std::printf(", %ld not run (interrupted)", not_run);
   if (o.certify) std::printf(", %ld verdicts depend on the tolerance", uncertified);
   if (o.ensemble.members > 0)

@@ -1,5 +1,6 @@
 // rubdyn: command-line entry point. Nothing but dispatch and the mapping of errors to exit codes.
 #include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -9,11 +10,15 @@
 #include "rubdyn/io/output_folder.hpp"
 
 int main(int argc, char** argv) {
+  // A file size limit (RLIMIT_FSIZE) would kill the process by SIGXFSZ with no summary: ignored,
+  // the write fails with EFBIG instead, and a failed write is exit 5 naming the file.
+  std::signal(SIGXFSZ, SIG_IGN);
   CLI::App app{"rubdyn: reference solutions for rotor-stator rub with Coulomb friction"};
   app.require_subcommand(1);
   app.footer(
       "Exit codes: 0 complete result; 2 bad input or usage, output folder in use or not "
-      "preparable (nothing written); 3 run ended early for a numerical reason; 4 interrupted by "
+      "preparable, an output path refused (nothing written); 3 run ended early for a numerical "
+      "reason; 4 interrupted by "
       "SIGINT/SIGTERM or by the wall-time budget run.max_wall; 5 a write failed (the message names "
       "the file). In 3, 4 and 5 the output so "
       "far is kept and summary.json says \"complete\": false with the reason (README.md).");
@@ -48,6 +53,9 @@ int main(int argc, char** argv) {
     return rubdyn::kExitBadInput;
   } catch (const rubdyn::FolderError& e) {
     std::fprintf(stderr, "rubdyn: error: %s (the run did not start)\n", e.what());
+    return rubdyn::kExitBadInput;
+  } catch (const rubdyn::PathRefused& e) {
+    std::fprintf(stderr, "rubdyn: error: %s (nothing written)\n", e.what());
     return rubdyn::kExitBadInput;
   } catch (const rubdyn::OutputError& e) {
     std::fprintf(stderr, "rubdyn: error: %s\n", e.what());

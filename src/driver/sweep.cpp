@@ -1,13 +1,18 @@
 #include "rubdyn/driver/sweep.hpp"
 
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -88,8 +93,13 @@ bool already_done(const CaseSpec& spec, const std::string& dir) {
   return run_complete(dir) && file_text(dir + "/case.resolved.toml") == to_toml(spec);
 }
 
+/// One run into `dir`. `own` is the worker's stop flag: raised by the sweep's stop (SIGINT,
+/// SIGTERM: a watcher copies it) and by a failed write of this run's folder (a full disk, the
+/// folder removed), so that the run ends at its next check instead of computing unwritten rows.
 OneRun run_point(const CaseSpec& spec, const std::string& dir, const AnalysisOptions& ao,
-                 bool resume, const std::atomic<bool>* stop) {
+                 bool resume, const std::atomic<bool>* sweep_stop, std::atomic<bool>* own) {
+  own->store(sweep_stop && sweep_stop->load());  // a failure of the previous run is not ours
+  const std::atomic<bool>* stop = own;
   OneRun r;
   if (resume && already_done(spec, dir)) {
     r.termination = std::string(to_string(Termination::Completed));
@@ -100,7 +110,7 @@ OneRun run_point(const CaseSpec& spec, const std::string& dir, const AnalysisOpt
       RunSummary s;
       std::string write_error;
       {
-        OutputFolder sink(dir, spec);
+        OutputFolder sink(dir, spec, own);
         s = simulate(spec, sink, {}, stop);
         write_error = sink.error();
       }
@@ -170,6 +180,92 @@ void ensemble_stats(SweepRow& row) {
   row.p_backward = fraction(backward);
   row.p_whip = fraction(whip);
   row.p_rolling = fraction(rolling);
+}
+
+/// FNV-1a, 64 bits: a stable hash (the same on every machine and build) for the plan.
+std::string fnv1a64(std::string_view text) {
+  std::uint64_t h = 14695981039346656037ull;
+  for (const char c : text) {
+    h ^= static_cast<unsigned char>(c);
+    h *= 1099511628211ull;
+  }
+  return fmt::format("{:016x}", h);
+}
+
+/// The plan hash: every point's resolved case (varied keys included, in point order) and every
+/// option that changes what a row says. The shard count is not in it (sweep-merge checks it).
+std::string plan_hash(const std::vector<CaseSpec>& specs, const SweepOptions& o, int members) {
+  std::string text = "rubdyn sweep plan 1\n";
+  for (const auto& v : o.vary) text += fmt::format("vary {} {}\n", v.key, v.values.size());
+  for (const auto& c : specs) text += to_toml(c) + "\n--\n";
+  const AnalysisOptions& a = o.analysis;
+  text += fmt::format("certify {}\nensemble {} {:.17g} {:.17g}\n", o.certify, members,
+                      o.ensemble.domega, o.ensemble.offset);
+  text += fmt::format("analysis {:.17g} {:.17g} {:.17g} {} {:.17g} {} {}\n", a.min_turns, a.window,
+                      a.overlap, a.pad, a.f_max, a.t0 ? fmt::format("{:.17g}", *a.t0) : "-",
+                      a.t1 ? fmt::format("{:.17g}", *a.t1) : "-");
+  return fnv1a64(text);
+}
+
+/// The "plan" of a sweep-plan.json or shard sidecar text ("" when it has none).
+std::string plan_of(const std::string& json) {
+  static const std::regex re(R"re("plan":\s*"([0-9a-f]{16})")re");
+  std::smatch m;
+  return std::regex_search(json, m, re) ? std::string(m[1]) : std::string();
+}
+
+std::string text_at(int dir_fd, const std::string& name) {
+  const int fd = ::openat(dir_fd, name.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) return "";
+  struct stat st {};
+  std::string text;
+  if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size < (1 << 20)) {
+    char buf[4096];
+    for (ssize_t n; (n = ::read(fd, buf, sizeof buf)) > 0;)
+      text.append(buf, static_cast<size_t>(n));
+  }
+  ::close(fd);
+  return text;
+}
+
+/// Takes the sweep folder (sweep.hpp): held open, checked writable, locked for the sweep's life
+/// (a shard shares the lock with the shards of its plan), its plan written.
+std::unique_ptr<HeldFolder> take_sweep_folder(const std::string& out, const std::string& hash,
+                                              bool sharded, long points) {
+  auto f = std::make_unique<HeldFolder>(out);  // FolderError: exit 2
+  f->check_writable();
+  std::string found;
+  const auto until = std::chrono::steady_clock::now() + kShardLockWait;
+  do {
+    if (f->try_lock(true)) {  // alone in the folder
+      found = plan_of(text_at(f->fd(), "sweep-plan.json"));
+      // the merged table of another plan would describe point folders this sweep replaces;
+      // that plan's shard tables stay (sweep-merge refuses them by their plan hash)
+      if (found != hash && ::unlinkat(f->fd(), "sweep.csv", 0) != 0 && errno != ENOENT)
+        throw FolderError(fmt::format("cannot remove {}/sweep.csv (the table of another sweep): {}",
+                                      out, std::strerror(errno)));
+      try {
+        write_file_at(f->fd(), "sweep-plan.json", out + "/sweep-plan.json",
+                      fmt::format("{{\"plan\": \"{}\", \"points_total\": {}}}\n", hash, points));
+      } catch (const OutputError& e) {
+        throw FolderError(e.what());
+      }
+      if (sharded && !f->try_lock(false))  // converted: the other shards of this plan may come
+        throw FolderError(fmt::format("cannot share the lock of {}", out));
+      return f;
+    }
+    if (!sharded) break;
+    found = plan_of(text_at(f->fd(), "sweep-plan.json"));
+    if (found == hash && f->try_lock(false)) return f;  // a shard of the same plan
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  } while (std::chrono::steady_clock::now() < until);
+  throw FolderError(fmt::format(
+      "{} is in use by another rubdyn sweep (it holds the folder's lock{}); choose another --out "
+      "or wait for it to end",
+      out,
+      sharded && !found.empty() && found != hash
+          ? fmt::format("; its plan is {}, this sweep's {}", found, hash)
+          : std::string()));
 }
 
 /// A number of the table; NaN (not computed) as an empty field.
@@ -255,6 +351,10 @@ Shard parse_shard(const std::string& text) {
   static const std::regex re(R"(\s*(\d+)\s*/\s*(\d+)\s*)");
   std::smatch m;
   Shard s;
+  if (trim(text).empty())
+    throw std::invalid_argument(
+        "--shard '': expected i/N (an unset job-array variable? without --shard the whole sweep "
+        "runs in every task)");
   if (!std::regex_match(text, m, re) || (s.index = small_int(m[1])) < 1 ||
       (s.count = small_int(m[2])) < s.index) {
     throw std::invalid_argument(
@@ -425,8 +525,14 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
       }
     }
   }
+  // the folder is taken (locked, checked, its plan written) before anything runs: a folder
+  // that cannot be prepared or is in use is refused with nothing run (FolderError, exit 2)
+  const std::string hash = plan_hash(specs, o, members);
+  const std::unique_ptr<HeldFolder> folder =
+      take_sweep_folder(o.out, hash, o.shard.count > 1, static_cast<long>(all.size()));
   if (o.plan) {
     SweepPlan p;
+    p.hash = hash;
     p.points = static_cast<long>(all.size());
     auto add = [&p](const CaseSpec& c) {
       ++p.runs;
@@ -443,9 +549,6 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
     p.output_bytes = 420.0 * p.output_rows;
     o.plan(p);
   }
-  std::error_code ec;
-  fs::create_directories(o.out, ec);
-  if (ec) throw std::runtime_error("cannot create " + o.out + ": " + ec.message());
 
   // One task per point (with its tight run) and per member, in point order: each writes only its
   // own slot, so the threads share nothing but the task counter and the progress call.
@@ -468,7 +571,7 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
   std::atomic<size_t> next{0};
   std::mutex mtx;
   long done = 0;
-  auto worker = [&] {
+  auto worker = [&](std::atomic<bool>* own) {
     for (size_t t = next++; t < tasks.size(); t = next++) {
       const auto [k, m] = tasks[t];
       SweepRow& row = rows[k];
@@ -480,7 +583,7 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
           member.message = "the sweep was interrupted before this member";
         } else {
           const OneRun r = run_point(member_specs[k][static_cast<size_t>(m - 1)], member.folder,
-                                     o.analysis, o.resume, o.stop);
+                                     o.analysis, o.resume, o.stop, own);
           member.termination = r.termination;
           member.message = r.message;
           member.complete = r.complete;
@@ -490,14 +593,15 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
         row.termination = "not_run";
         row.message = "the sweep was interrupted before this point";
       } else {
-        const OneRun r = run_point(specs[mine[k]], row.folder, o.analysis, o.resume, o.stop);
+        const OneRun r = run_point(specs[mine[k]], row.folder, o.analysis, o.resume, o.stop, own);
         row.termination = r.termination;
         row.message = r.message;
         row.complete = r.complete;
         row.wall_seconds = r.wall;
         row.v = r.v;
         if (o.certify) {
-          const OneRun t = run_point(tight[k], row.folder + "-tight", o.analysis, o.resume, o.stop);
+          const OneRun t =
+              run_point(tight[k], row.folder + "-tight", o.analysis, o.resume, o.stop, own);
           row.certified_run = true;
           row.tight_termination = t.termination;
           row.tight = t.v;
@@ -511,41 +615,125 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
     }
   };
   const int n = std::max(1, std::min<int>(o.jobs, static_cast<int>(tasks.size())));
+  std::vector<std::atomic<bool>> own(static_cast<size_t>(n));  // each worker's stop flag
+  std::atomic<bool> finished{false};
+  std::thread watcher;  // copies the sweep's stop into every worker's flag
+  if (o.stop)
+    watcher = std::thread([&] {
+      while (!finished.load()) {
+        if (o.stop->load())
+          for (auto& f : own) f.store(true);
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      }
+    });
   std::vector<std::thread> pool;
-  for (int j = 1; j < n; ++j) pool.emplace_back(worker);
-  worker();
+  for (int j = 1; j < n; ++j) pool.emplace_back(worker, &own[static_cast<size_t>(j)]);
+  worker(&own[0]);
   for (auto& t : pool) t.join();
+  finished.store(true);
+  if (watcher.joinable()) watcher.join();
   if (members > 0)
     for (auto& row : rows) ensemble_stats(row);
 
   std::vector<std::string> keys;
   for (const auto& v : o.vary) keys.push_back(v.key);
   const std::string table = sweep_csv(keys, rows, o.certify, members > 0);
+  // a folder removed or replaced meanwhile: the table would describe folders that are gone
+  if (!folder->intact())
+    throw OutputError(folder->lost_message() + "; the sweep's table is not written");
+  const int fd = folder->fd();
   if (o.shard.count == 1) {
-    write_file_atomic((fs::path(o.out) / "sweep.csv").string(), table);
+    write_file_at(fd, "sweep.csv", (fs::path(o.out) / "sweep.csv").string(), table);
   } else {
     const std::string stem = fmt::format("sweep-shard-{}-of-{}", o.shard.index, o.shard.count);
-    // the ensemble's settings, which sweep-merge requires to be the same in every shard
+    // the plan and the ensemble's settings, which sweep-merge requires to be the same in every
+    // shard
     const std::string ensemble =
         members > 0 ? fmt::format("{{\"members\": {}, \"domega\": {}, \"offset\": {}}}", members,
                                   o.ensemble.domega, o.ensemble.offset)
                     : "{\"members\": 0}";
-    write_file_atomic((fs::path(o.out) / (stem + ".json")).string(),
-                      fmt::format("{{\"shard\": {}, \"shards\": {}, \"points_total\": {}, "
-                                  "\"certify\": {}, \"ensemble\": {}}}\n",
-                                  o.shard.index, o.shard.count, all.size(),
-                                  o.certify ? "true" : "false", ensemble));
-    write_file_atomic((fs::path(o.out) / (stem + ".csv")).string(), table);
+    write_file_at(fd, stem + ".json", (fs::path(o.out) / (stem + ".json")).string(),
+                  fmt::format("{{\"shard\": {}, \"shards\": {}, \"points_total\": {}, "
+                              "\"plan\": \"{}\", \"certify\": {}, \"ensemble\": {}}}\n",
+                              o.shard.index, o.shard.count, all.size(), hash,
+                              o.certify ? "true" : "false", ensemble));
+    write_file_at(fd, stem + ".csv", (fs::path(o.out) / (stem + ".csv")).string(), table);
   }
   return rows;
 }
+
+namespace {
+
+bool full_number(const std::string& x) {
+  char* end = nullptr;
+  errno = 0;
+  (void)std::strtod(x.c_str(), &end);
+  return !x.empty() && end == x.c_str() + x.size() && x.find_first_of(" \t") == std::string::npos;
+}
+
+bool full_count(const std::string& x) {
+  if (x.empty() || x.size() > 18 || x.find_first_not_of("0123456789") != std::string::npos)
+    return false;
+  return true;
+}
+
+bool is_termination(const std::string& x) {
+  if (x == "error" || x == "not_run") return true;
+  for (int k = 0; k <= static_cast<int>(Termination::OutputFailure); ++k)
+    if (x == to_string(static_cast<Termination>(k))) return true;
+  return false;
+}
+
+/// What a field of the sweep table must be, by its column (sweep_csv): the rule it breaks, or
+/// "" when it is valid. Columns between "point" and "termination" are the varied keys.
+std::string field_rule(const std::string& column, const std::string& x, bool varied) {
+  static const std::set<std::string> numbers = {
+      "omega_max",      "omega_final",    "contact_fraction",          "backward_fraction",
+      "whip_fraction",  "stick_fraction", "max_friction_torque_ratio", "wall_seconds",
+      "tight_omega_max"};
+  static const std::set<std::string> optional_numbers = {"t_omega_lim",
+                                                         "backward_onset",
+                                                         "whip_onset",
+                                                         "sign_backward_onset",
+                                                         "permanent_contact_onset",
+                                                         "p_limited",
+                                                         "p_backward",
+                                                         "p_whip",
+                                                         "p_rolling",
+                                                         "omega_max_min",
+                                                         "omega_max_max"};
+  static const std::set<std::string> counts = {"events", "ensemble_members", "ensemble_incomplete"};
+  static const std::set<std::string> flags = {"complete",      "limited",        "certified",
+                                              "tight_limited", "tight_backward", "tight_whip"};
+  if (varied) return x.empty() ? "must be the point's value of the varied key" : "";
+  if (numbers.count(column)) return full_number(x) ? "" : "must be a number";
+  if (optional_numbers.count(column))
+    return x.empty() || full_number(x) ? "" : "must be a number or empty";
+  if (counts.count(column)) return full_count(x) ? "" : "must be a count (digits)";
+  if (flags.count(column)) return x == "yes" || x == "no" ? "" : "must be yes or no";
+  if (column == "termination") return is_termination(x) ? "" : "must be a termination";
+  if (column == "tight_termination")
+    return x.empty() || is_termination(x) ? "" : "must be a termination or empty";
+  if (column == "folder") return "";  // checked against the point index by the caller
+  return "is not a column of a sweep table";
+}
+
+}  // namespace
 
 long merge_sweep_shards(const std::string& out) {
   namespace fs = std::filesystem;
   static const std::regex re(R"(sweep-shard-(\d+)-of-(\d+)\.csv)");
   std::map<int, fs::path> shards;
   int count = -1;
-  if (!fs::is_directory(out)) throw std::runtime_error(out + ": not a directory");
+  std::error_code ec;
+  if (!fs::is_directory(out, ec)) throw std::runtime_error(out + ": not a directory");
+  // the folder's lock: shards still running hold it (shared), and so would another merge
+  HeldFolder folder(out);
+  if (!folder.try_lock(true))
+    throw std::runtime_error(
+        fmt::format("{} is in use by a running rubdyn sweep (it holds the "
+                    "folder's lock): merge once every shard has ended",
+                    out));
   for (const auto& e : fs::directory_iterator(out)) {
     std::smatch m;
     const std::string name = e.path().filename().string();
@@ -553,6 +741,10 @@ long merge_sweep_shards(const std::string& out) {
     const int i = small_int(m[1]), n = small_int(m[2]);
     if (i < 1 || n < i)
       throw std::runtime_error(fmt::format("{}: not a shard i of N with 1 <= i <= N", name));
+    if (name != fmt::format("sweep-shard-{}-of-{}.csv", i, n))
+      throw std::runtime_error(fmt::format(
+          "{}/{}: not a name rubdyn writes (sweep-shard-{}-of-{}.csv): rename or remove it", out,
+          name, i, n));
     if (count >= 0 && n != count)
       throw std::runtime_error(
           fmt::format("{}: shards of {} and of {} sweeps mixed", out, count, n));
@@ -560,7 +752,7 @@ long merge_sweep_shards(const std::string& out) {
     shards[i] = e.path();
   }
   if (count < 0) throw std::runtime_error(out + ": no sweep-shard-i-of-N.csv files");
-  std::string header, body, ensemble;
+  std::string header, body, ensemble, plan;
   std::map<long, std::string> lines;
   long total = -1;
   for (int i = 1; i <= count; ++i) {
@@ -568,9 +760,10 @@ long merge_sweep_shards(const std::string& out) {
       throw std::runtime_error(fmt::format("{}: shard {} of {} missing (sweep-shard-{}-of-{}.csv)",
                                            out, i, count, i, count));
     const fs::path side = fs::path(out) / fmt::format("sweep-shard-{}-of-{}.json", i, count);
-    std::ifstream js(side);
-    std::string text((std::istreambuf_iterator<char>(js)), std::istreambuf_iterator<char>());
+    const std::string text = text_at(folder.fd(), side.filename().string());
+    if (text.empty()) throw std::runtime_error(side.string() + ": missing or empty");
     static const std::regex tot(R"("points_total":\s*(\d+))");
+    static const std::regex shard_re(R"("shard":\s*(\d+),\s*"shards":\s*(\d+))");
     std::smatch m;
     if (!std::regex_search(text, m, tot))
       throw std::runtime_error(side.string() + ": missing or without points_total");
@@ -582,6 +775,9 @@ long merge_sweep_shards(const std::string& out) {
       throw std::runtime_error(
           fmt::format("{}: points_total {} differs from {} of shard 1", side.string(), t, total));
     total = t;
+    if (!std::regex_search(text, m, shard_re) || small_int(m[1]) != i || small_int(m[2]) != count)
+      throw std::runtime_error(
+          fmt::format("{}: does not say shard {} of {}", side.string(), i, count));
     // the same ensemble settings (none in a shard written before ensembles existed): the P
     // columns of two different ensembles would look alike in one table
     static const std::regex ens(R"("ensemble":\s*(\{[^}]*\}))");
@@ -591,26 +787,59 @@ long merge_sweep_shards(const std::string& out) {
     if (e != ensemble)
       throw std::runtime_error(
           fmt::format("{}: ensemble {} differs from {} of shard 1", side.string(), e, ensemble));
+    // one plan: shards of two sweeps with the same point count would merge into one table
+    const std::string p = plan_of(text);
+    if (p.empty())
+      throw std::runtime_error(side.string() +
+                               ": no plan hash (written by another rubdyn, or edited): re-run "
+                               "this shard");
+    if (i == 1) plan = p;
+    if (p != plan)
+      throw std::runtime_error(
+          fmt::format("{}: plan {} differs from {} of shard 1 (shards of two different sweeps)",
+                      side.string(), p, plan));
     const CsvTable table = read_csv(shards[i].string());
+    if (!table.warnings.empty())
+      throw std::runtime_error(table.warnings.front() + " (a shard must be complete to merge)");
     if (header.empty()) header = table.header_text;
     if (table.header_text != header)
       throw std::runtime_error(shards[i].string() + ":1: header differs from shard 1's");
+    const int term = table.column("termination"), folder_col = table.column("folder");
+    if (table.header.empty() || table.header[0] != "point" || term < 1 || folder_col < 0)
+      throw std::runtime_error(shards[i].string() +
+                               ":1: not a sweep table (point, the varied keys, termination, ...)");
     for (std::size_t k = 0; k < table.rows.size(); ++k) {
-      const std::string& first = table.rows[k][0];
+      const auto& row = table.rows[k];
+      const std::string& first = row[0];
       const long ln = table.line_of[k];
       char* end = nullptr;
       errno = 0;
       const long idx = std::strtol(first.c_str(), &end, 10);
-      if (first.empty() || *end != '\0' || errno != 0 || idx < 0 || idx >= total)
+      if (!full_count(first) || *end != '\0' || errno != 0 || idx < 0 || idx >= total)
         throw std::runtime_error(fmt::format("{}:{}: point index '{}' is not in [0, {})",
                                              shards[i].string(), ln, first, total));
+      if (idx % count != i - 1)
+        throw std::runtime_error(
+            fmt::format("{}:{}: point {} does not belong to shard {} of {} (index % {} = {})",
+                        shards[i].string(), ln, idx, i, count, count, idx % count + 1));
       if (lines.count(idx))
         throw std::runtime_error(
             fmt::format("{}:{}: point {} appears twice", shards[i].string(), ln, idx));
+      for (std::size_t c = 1; c < row.size(); ++c) {
+        const std::string& column = table.header[c];
+        const std::string rule = field_rule(column, row[c], static_cast<int>(c) < term);
+        if (!rule.empty())
+          throw std::runtime_error(fmt::format("{}:{}: column {}: '{}' {}", shards[i].string(), ln,
+                                               column, row[c], rule));
+      }
+      const std::string want = fmt::format("p{:04d}", idx);
+      if (fs::path(row[static_cast<std::size_t>(folder_col)]).filename() != want)
+        throw std::runtime_error(
+            fmt::format("{}:{}: column folder: '{}' must be the point's "
+                        "folder .../{}",
+                        shards[i].string(), ln, row[static_cast<std::size_t>(folder_col)], want));
       lines[idx] = table.text[k];
     }
-    if (!table.warnings.empty())
-      throw std::runtime_error(table.warnings.front() + " (a shard must be complete to merge)");
   }
   std::vector<long> missing;
   for (long p = 0; p < total; ++p)
@@ -620,7 +849,7 @@ long merge_sweep_shards(const std::string& out) {
                                          missing.size(), total, missing.front()));
   std::string text = header + "\n";
   for (const auto& [idx, line] : lines) text += line + "\n";
-  write_file_atomic((fs::path(out) / "sweep.csv").string(), text);
+  write_file_at(folder.fd(), "sweep.csv", (fs::path(out) / "sweep.csv").string(), text);
   return static_cast<long>(lines.size());
 }
 

@@ -1,7 +1,10 @@
 // Case files: TOML -> CaseSpec with complete validation, and CaseSpec -> TOML.
 // The only file of the project that includes the TOML parser.
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/stat.h>
 #include <toml++/toml.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -818,24 +821,45 @@ CaseSpec parse_case(std::string_view toml_text, const std::string& source,
 }
 
 CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides) {
-  namespace fs = std::filesystem;
   auto refuse = [&path](const std::string& why) {
     throw CaseError({{path, 0, "(file)", "", why}});
   };
-  std::error_code ec;
-  const auto st = fs::status(path, ec);
-  if (fs::is_directory(st)) refuse("is a directory, not a case file");
-  // a device (/dev/zero), a pipe or a socket may never end: read at most kMaxCaseBytes
-  std::ifstream in(path, std::ios::binary);
-  if (!in) refuse(std::string("cannot read the case file: ") + std::strerror(errno));
-  std::string text(kMaxCaseBytes + 1, '\0');
-  in.read(text.data(), static_cast<std::streamsize>(text.size()));
-  text.resize(static_cast<std::size_t>(in.gcount()));
-  if (text.size() > kMaxCaseBytes) {
-    refuse(fmt::format("{} larger than {} bytes: not a case file",
-                       fs::is_regular_file(st) ? "a file" : "a special file (device or pipe)",
-                       kMaxCaseBytes));
+  // Opened without waiting (O_NONBLOCK: a FIFO without a writer would block the open) and
+  // asked what it is before a byte is read: only a regular file is a case file (a FIFO or a
+  // device may never end, or never begin).
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
+  if (fd < 0) refuse(std::string("cannot read the case file: ") + std::strerror(errno));
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) {
+    const int err = errno;
+    ::close(fd);
+    refuse(std::string("cannot read the case file: ") + std::strerror(err));
   }
+  if (!S_ISREG(st.st_mode)) {
+    ::close(fd);
+    refuse(S_ISDIR(st.st_mode)    ? "is a directory, not a case file"
+           : S_ISFIFO(st.st_mode) ? "is a FIFO (named pipe), not a regular file: not read"
+           : S_ISSOCK(st.st_mode) ? "is a socket, not a regular file: not read"
+                                  : "is a device, not a regular file: not read");
+  }
+  // a regular file may still grow while read: read at most kMaxCaseBytes + 1
+  std::string text(kMaxCaseBytes + 1, '\0');
+  std::size_t got = 0;
+  while (got < text.size()) {
+    const ssize_t n = ::read(fd, text.data() + got, text.size() - got);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      const int err = errno;
+      ::close(fd);
+      refuse(std::string("cannot read the case file: ") + std::strerror(err));
+    }
+    if (n == 0) break;
+    got += static_cast<std::size_t>(n);
+  }
+  ::close(fd);
+  text.resize(got);
+  if (text.size() > kMaxCaseBytes)
+    refuse(fmt::format("a file larger than {} bytes: not a case file", kMaxCaseBytes));
   if (text.find('\0') != std::string::npos) refuse("holds NUL bytes: not a text (TOML) file");
   return parse_case(text, path, overrides);
 }
@@ -897,7 +921,16 @@ std::vector<std::string> case_keys(const CaseSpec& c) {
 }
 
 std::string output_folder(const CaseSpec& c) {
-  return c.output.folder.empty() ? "out/" + c.name : c.output.folder;
+  if (!c.output.folder.empty()) return c.output.folder;
+  // the name becomes one folder under out/: a name that is no single folder name would write
+  // elsewhere (".." is out/.. = the current folder, "a/../../x" anywhere)
+  const std::string& n = c.name;
+  if (n.empty() || n == "." || n == ".." || n.find('/') != std::string::npos ||
+      n.find('\0') != std::string::npos)
+    throw CaseError({{c.source, 0, "name", n,
+                      "cannot name the output folder out/<name> (empty, '.', '..' or with a "
+                      "'/'): give output.folder or --out, or another name"}});
+  return "out/" + n;
 }
 
 }  // namespace rubdyn

@@ -2,6 +2,7 @@
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -26,13 +27,6 @@ std::string cannot_write(const std::string& path) {
                      errno ? std::strerror(errno) : "write failed (no reason given)");
 }
 
-std::FILE* open_or_throw(const std::string& path) {
-  errno = 0;
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (!f) throw std::runtime_error(cannot_write(path));
-  return f;
-}
-
 void write_or_throw(std::FILE* f, const std::string& text, const std::string& path) {
   errno = 0;
   if (std::fwrite(text.data(), 1, text.size(), f) != text.size()) {
@@ -50,7 +44,66 @@ std::string json_number(double x) {
   return std::isfinite(x) ? fmt::format("{:.17g}", x) : "null";
 }
 
+/// Links of a folder held open: 0 once it was removed.
+long fstat_nlink(int fd) {
+  struct stat st {};
+  return ::fstat(fd, &st) == 0 ? static_cast<long>(st.st_nlink) : 0;
+}
+
 }  // namespace
+
+HeldFolder::HeldFolder(const std::string& dir) : dir_(dir) {
+  namespace fs = std::filesystem;
+  if (dir.empty()) throw FolderError("an empty path is no output folder");
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw FolderError(fmt::format("cannot create {}: {}", dir, ec.message()));
+  fd_ = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd_ < 0)
+    throw FolderError(errno == ENOTDIR
+                          ? fmt::format("{}: not a directory", dir)
+                          : fmt::format("cannot open {}: {}", dir, std::strerror(errno)));
+}
+
+HeldFolder::~HeldFolder() {
+  if (fd_ >= 0) ::close(fd_);  // releases the lock
+}
+
+bool HeldFolder::try_lock(bool exclusive) {
+  if (::flock(fd_, (exclusive ? LOCK_EX : LOCK_SH) | LOCK_NB) == 0) return true;
+  if (errno != EWOULDBLOCK)
+    throw FolderError(fmt::format("cannot lock {}: {}", dir_, std::strerror(errno)));
+  return false;
+}
+
+void HeldFolder::check_writable() const {
+  // access() answers for root as if every folder were writable; a real write answers for all:
+  // a file created and removed again (O_TMPFILE leaves no name even if we are killed here)
+  int probe = ::openat(fd_, ".", O_TMPFILE | O_WRONLY | O_CLOEXEC, 0600);
+  if (probe < 0 && (errno == EOPNOTSUPP || errno == EISDIR || errno == EINVAL)) {
+    // a file system without O_TMPFILE: the permission check alone
+    if (::faccessat(fd_, ".", W_OK | X_OK, 0) == 0) return;
+  } else if (probe >= 0) {
+    ::close(probe);
+    return;
+  }
+  throw FolderError(fmt::format("cannot write into {}: {}", dir_, std::strerror(errno)));
+}
+
+bool HeldFolder::intact() const {
+  struct stat held {
+  }, now{};
+  if (::fstat(fd_, &held) != 0 || held.st_nlink == 0) return false;  // removed
+  if (::stat(dir_.c_str(), &now) != 0) return false;                 // the path leads nowhere
+  return now.st_dev == held.st_dev && now.st_ino == held.st_ino;     // or to another folder
+}
+
+std::string HeldFolder::lost_message() const {
+  return fmt::format(
+      "the output folder {} was removed or replaced while rubdyn was writing into it (what was "
+      "written went with the folder; nothing is written into a folder that took its path)",
+      dir_);
+}
 
 OutputFolder::OutputFolder(const std::string& dir, const CaseSpec& spec, std::atomic<bool>* stop)
     : dir_(dir), stop_(stop) {
@@ -62,46 +115,51 @@ OutputFolder::OutputFolder(const std::string& dir, const CaseSpec& spec, std::at
     n_contacts_ = model->contact_count();
     n_observables_ = static_cast<int>(model->observables().size());
   }
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) throw FolderError(fmt::format("cannot create {}: {}", dir, ec.message()));
-  if (!fs::is_directory(dir, ec)) throw FolderError(fmt::format("{}: not a directory", dir));
+  folder_ = std::make_unique<HeldFolder>(dir);
   // Advisory lock on the directory itself (no lock file left behind): a second run into the
   // same folder would interleave its rows with ours.
-  lock_fd_ = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (lock_fd_ < 0) throw FolderError(fmt::format("cannot open {}: {}", dir, std::strerror(errno)));
-  if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
-    const int err = errno;
-    ::close(lock_fd_);
-    lock_fd_ = -1;
-    throw FolderError(err == EWOULDBLOCK
-                          ? fmt::format("{} is in use by another rubdyn run (it holds the folder's "
-                                        "lock); choose another --out or wait for it to end",
-                                        dir)
-                          : fmt::format("cannot lock {}: {}", dir, std::strerror(err)));
-  }
+  if (!folder_->try_lock(true))
+    throw FolderError(
+        fmt::format("{} is in use by another rubdyn run (it holds the folder's "
+                    "lock); choose another --out or wait for it to end",
+                    dir));
   // Everything that can be checked is checked before the first byte is written: the folder
   // and the files this run replaces must be writable; a summary.json of an earlier run must go
-  // (it would describe another run next to our files).
+  // (it would describe another run next to our files), and so must what was derived from it.
+  const int fd = folder_->fd();
   auto fail = [&](const std::string& what) {
-    ::close(lock_fd_);
-    lock_fd_ = -1;
+    folder_.reset();  // unlocked
     throw FolderError(what);
   };
-  if (::access(dir.c_str(), W_OK | X_OK) != 0)
-    fail(fmt::format("cannot write into {}: {}", dir, std::strerror(errno)));
-  for (const char* name : {"case.resolved.toml", "timeseries.csv", "events.csv"}) {
-    const std::string path = dir + "/" + name;
-    if (fs::exists(fs::symlink_status(path, ec)) && ::access(path.c_str(), W_OK) != 0)
-      fail(fmt::format("cannot write {}: {}", path, std::strerror(errno)));
-  }
-  if (!fs::remove(dir + "/summary.json", ec) && ec)
-    fail(fmt::format("cannot remove the old {}/summary.json: {}", dir, ec.message()));
   try {
-    write_file_atomic(dir + "/case.resolved.toml", to_toml(spec));
-    ts_ = open_or_throw(dir + "/timeseries.csv");
-    ev_ = open_or_throw(dir + "/events.csv");
+    folder_->check_writable();
+  } catch (const FolderError& e) {
+    fail(e.what());
+  }
+  for (const char* name : {"case.resolved.toml", "timeseries.csv", "events.csv"}) {
+    struct stat st {};
+    if (::fstatat(fd, name, &st, AT_SYMLINK_NOFOLLOW) == 0 && ::faccessat(fd, name, W_OK, 0) != 0)
+      fail(fmt::format("cannot write {}/{}: {}", dir, name, std::strerror(errno)));
+  }
+  if (::unlinkat(fd, "summary.json", 0) != 0 && errno != ENOENT)
+    fail(fmt::format("cannot remove the old {}/summary.json: {}", dir, std::strerror(errno)));
+  struct stat an {};
+  const bool analysis_dir =
+      ::fstatat(fd, "analysis", &an, AT_SYMLINK_NOFOLLOW) == 0 && S_ISDIR(an.st_mode);
+  for (const std::string name : kDerivedFiles) {
+    if (name.starts_with("analysis/") && !analysis_dir) continue;  // never through a link
+    struct stat st {};
+    if (::fstatat(fd, name.c_str(), &st, AT_SYMLINK_NOFOLLOW) != 0 || !S_ISREG(st.st_mode))
+      continue;
+    if (::unlinkat(fd, name.c_str(), 0) != 0 && errno != ENOENT)
+      fail(fmt::format("cannot remove {}/{} (derived from an earlier run in this folder): {}", dir,
+                       name, std::strerror(errno)));
+  }
+  if (analysis_dir) ::unlinkat(fd, "analysis", AT_REMOVEDIR);  // only when empty: kept otherwise
+  try {
+    write_file_at(fd, "case.resolved.toml", dir + "/case.resolved.toml", to_toml(spec));
+    ts_ = open_output_stream_at(fd, "timeseries.csv", dir + "/timeseries.csv");
+    ev_ = open_output_stream_at(fd, "events.csv", dir + "/events.csv");
     std::string header, ev_header;
     for (const auto& c : columns_) header += (header.empty() ? "" : ",") + c.name;
     for (const auto& c : event_columns_) ev_header += (ev_header.empty() ? "" : ",") + c.name;
@@ -121,7 +179,6 @@ OutputFolder::OutputFolder(const std::string& dir, const CaseSpec& spec, std::at
 OutputFolder::~OutputFolder() {
   if (ts_) std::fclose(ts_);
   if (ev_) std::fclose(ev_);
-  if (lock_fd_ >= 0) ::close(lock_fd_);  // releases the lock
 }
 
 void OutputFolder::failed(const std::string& file) {
@@ -129,7 +186,15 @@ void OutputFolder::failed(const std::string& file) {
   if (stop_) stop_->store(true);
 }
 
+void OutputFolder::check_folder() {
+  since_check_ = 0;
+  if (!error_.empty() || folder_->intact()) return;
+  error_ = folder_->lost_message();
+  if (stop_) stop_->store(true);
+}
+
 void OutputFolder::sample(const Sample& s) {
+  if (++since_check_ >= kCheckEverySamples) check_folder();
   if (!ts_ || !error_.empty()) return;
   // a sample of another model's size is a bug of the caller, not bad input
   RUBDYN_DEMAND(s.q.size() == n_dofs_ && s.v.size() == n_dofs_ &&
@@ -156,6 +221,7 @@ void OutputFolder::sample(const Sample& s) {
 }
 
 void OutputFolder::event(const EventRecord& e) {
+  check_folder();
   if (!ev_ || !error_.empty()) return;
   auto csv_text = [](const std::string& s) {
     std::string out = "\"";
@@ -194,6 +260,7 @@ void OutputFolder::end(const RunSummary& s) {
   if (ts_ && std::fclose(ts_) != 0) failed("timeseries.csv");
   if (ev_ && std::fclose(ev_) != 0) failed("events.csv");
   ts_ = ev_ = nullptr;
+  check_folder();
   RunSummary out = s;
   if (!error_.empty()) {
     out.termination = Termination::OutputFailure;
@@ -202,10 +269,18 @@ void OutputFolder::end(const RunSummary& s) {
     out.message = error_ + (own ? " (the solver also ended: " + s.message + ")" : std::string());
   }
   try {
-    write_file_atomic(dir_ + "/summary.json", summary_json(out));
+    // into the folder held open: a folder that took our path is not ours to write into
+    if (error_.empty() || folder_->intact() || fstat_nlink(folder_->fd()) > 0)
+      write_file_at(folder_->fd(), "summary.json", dir_ + "/summary.json", summary_json(out));
+    else
+      throw OutputError("cannot write " + dir_ + "/summary.json: the folder was removed");
   } catch (const std::runtime_error& e) {
-    if (error_.empty()) error_ = e.what();
-    throw OutputError(e.what());
+    // the first failure first: the file whose write failed is what the user must look at
+    if (error_.empty()) {
+      error_ = e.what();
+      throw OutputError(e.what());
+    }
+    throw OutputError(error_ + "; " + e.what());
   }
 }
 

@@ -1,12 +1,13 @@
 #include "rubdyn/io/text_files.hpp"
 
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <stdexcept>
 
 namespace rubdyn {
@@ -65,25 +66,156 @@ std::string cut_row_warning(const std::string& file, long line) {
       line);
 }
 
-void write_file_atomic(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  // Every step checked, close included (it flushes: a full disk shows there).
-  errno = 0;
-  std::FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (!f) throw OutputError("cannot write " + tmp + ": " + std::strerror(errno));
-  const bool wrote = std::fwrite(text.data(), 1, text.size(), f) == text.size();
-  const bool flushed = wrote && std::fflush(f) == 0;
-  const int err = errno;
-  const bool closed = std::fclose(f) == 0;
-  if (!(wrote && flushed && closed)) {
-    const std::string why = std::strerror(wrote && flushed ? errno : err);
-    std::error_code ignore;
-    std::filesystem::remove(tmp, ignore);
-    throw OutputError("cannot write " + path + ": " + why);
+namespace {
+
+std::string reason(int err) {
+  return err ? std::strerror(err) : "write failed (no reason given)";
+}
+
+[[noreturn]] void cannot(const std::string& shown, int err) {
+  throw OutputError(fmt::format("cannot write {}: {}", shown, reason(err)));
+}
+
+[[noreturn]] void refuse(const std::string& shown, const std::string& why) {
+  throw PathRefused(fmt::format("cannot write {}: {}", shown, why));
+}
+
+bool same_file(const struct stat& a, const struct stat& b) {
+  return a.st_dev == b.st_dev && a.st_ino == b.st_ino;
+}
+
+/// The path is the file the standard output goes to.
+bool is_stdout(const struct stat& st) {
+  struct stat out {};
+  return ::fstat(STDOUT_FILENO, &out) == 0 && same_file(st, out);
+}
+
+/// How a path is written (the rule in text_files.hpp).
+enum class Way { Replace, Through, Stdout };
+
+/// What `name` is, by the rule; refusals thrown. Opens nothing.
+Way classify(int dir_fd, const std::string& name, const std::string& shown) {
+  if (name.empty()) refuse("''", "an empty path");
+  struct stat l {};
+  if (::fstatat(dir_fd, name.c_str(), &l, AT_SYMLINK_NOFOLLOW) != 0) {
+    if (errno == ENOENT) return Way::Replace;  // created (a missing parent fails at the open)
+    cannot(shown, errno);
   }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw OutputError("cannot rename " + tmp + " to " + path + ": " + ec.message());
+  struct stat f {};
+  if (::fstatat(dir_fd, name.c_str(), &f, 0) != 0) {
+    if (S_ISLNK(l.st_mode) && errno == ENOENT)
+      refuse(shown,
+             "a symbolic link to a missing file (rubdyn never replaces a link: create "
+             "the file it names, or remove the link)");
+    cannot(shown, errno);
+  }
+  if (S_ISDIR(f.st_mode)) refuse(shown, "a directory");
+  if (S_ISBLK(f.st_mode)) refuse(shown, "a block device (rubdyn does not write onto disks)");
+  if (is_stdout(f)) return Way::Stdout;
+  if (S_ISLNK(l.st_mode) || !S_ISREG(f.st_mode)) return Way::Through;
+  return Way::Replace;
+}
+
+/// Opens a device, FIFO, socket or the file behind a link for writing through it: never
+/// created, never replaced, never waited for (a FIFO without a reader is refused).
+int open_through(int dir_fd, const std::string& name, const std::string& shown) {
+  const int fd = ::openat(dir_fd, name.c_str(), O_WRONLY | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
+    if (errno == ENXIO) refuse(shown, "a FIFO without a reader, or a socket");
+    cannot(shown, errno);
+  }
+  struct stat st {};
+  const int flags = ::fcntl(fd, F_GETFL);
+  if (::fstat(fd, &st) != 0 || flags < 0 || ::fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) != 0 ||
+      (S_ISREG(st.st_mode) && ::ftruncate(fd, 0) != 0)) {
+    const int err = errno;
+    ::close(fd);
+    cannot(shown, err);
+  }
+  return fd;
+}
+
+/// Writes all of `text` to `fd`: 0, or the errno of the failed write (EIO when none is given).
+int write_all(int fd, const std::string& text) {
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return n < 0 && errno ? errno : EIO;
+    done += static_cast<std::size_t>(n);
+  }
+  return 0;
+}
+
+}  // namespace
+
+void write_file_at(int dir_fd, const std::string& name, const std::string& shown,
+                   const std::string& text) {
+  switch (classify(dir_fd, name, shown)) {
+    case Way::Stdout:
+      errno = 0;
+      if (std::fflush(stdout) != 0) cannot(shown, errno);
+      if (const int err = write_all(STDOUT_FILENO, text)) cannot(shown, err);
+      return;
+    case Way::Through: {
+      const int fd = open_through(dir_fd, name, shown);
+      int err = write_all(fd, text);
+      if (::close(fd) != 0 && err == 0) err = errno ? errno : EIO;
+      if (err != 0) cannot(shown, err);
+      return;
+    }
+    case Way::Replace: break;
+  }
+  // Every step checked, close included (a full disk may show only there). The temporary file
+  // is created afresh (O_EXCL, O_NOFOLLOW): a link or a FIFO of that name is never written.
+  const std::string tmp = name + ".tmp";
+  if (::unlinkat(dir_fd, tmp.c_str(), 0) != 0 && errno != ENOENT) cannot(shown + ".tmp", errno);
+  const int fd =
+      ::openat(dir_fd, tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+  if (fd < 0) cannot(shown + ".tmp", errno);
+  int err = write_all(fd, text);
+  if (::close(fd) != 0 && err == 0) err = errno ? errno : EIO;
+  if (err != 0) {
+    ::unlinkat(dir_fd, tmp.c_str(), 0);
+    cannot(shown, err);
+  }
+  if (::renameat(dir_fd, tmp.c_str(), dir_fd, name.c_str()) != 0) {
+    err = errno;
+    ::unlinkat(dir_fd, tmp.c_str(), 0);
+    throw OutputError(fmt::format("cannot rename {}.tmp to {}: {}", shown, shown, reason(err)));
+  }
+}
+
+void write_file_atomic(const std::string& path, const std::string& text) {
+  write_file_at(AT_FDCWD, path, path, text);
+}
+
+std::FILE* open_output_stream_at(int dir_fd, const std::string& name, const std::string& shown) {
+  int fd = -1;
+  switch (classify(dir_fd, name, shown)) {
+    case Way::Stdout:
+      errno = 0;
+      if (std::fflush(stdout) != 0) cannot(shown, errno);
+      fd = ::fcntl(STDOUT_FILENO, F_DUPFD_CLOEXEC, 0);
+      break;
+    case Way::Through: fd = open_through(dir_fd, name, shown); break;
+    case Way::Replace:
+      fd = ::openat(dir_fd, name.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_NOFOLLOW | O_CLOEXEC,
+                    0666);
+      break;
+  }
+  if (fd < 0) cannot(shown, errno);
+  std::FILE* f = ::fdopen(fd, "w");
+  if (!f) {
+    const int err = errno;
+    ::close(fd);
+    cannot(shown, err);
+  }
+  return f;
+}
+
+void check_output_path(const std::string& path) {
+  (void)classify(AT_FDCWD, path, path);
 }
 
 }  // namespace rubdyn

@@ -118,7 +118,7 @@ def bad_options():
     for name, args, key in cases:
         expect_bad_input("bad option", name, ["run", CASE] + args, key)
     for name, path, what in [("a directory", "/tmp", "directory"),
-                             ("/dev/zero", "/dev/zero", "larger than")]:
+                             ("/dev/zero", "/dev/zero", "is a device")]:
         rc, err = run(["check", path])
         record("bad option", "case file is " + name, "exit 2, says what it is",
                "exit %d" % rc, rc == 2 and what in err, err.splitlines()[-1] if err else "")

@@ -35,7 +35,19 @@
 // Members run on the same threads as points, go with their point in a shard, and --resume skips
 // the complete members of the same resolved case as it skips points; a member that ends early
 // is reported as a point is (rubdyn sweep exits 3).
+//
+// The sweep folder is owned like a run's (io/output_folder.hpp): held open and locked for the
+// sweep's life (exclusively; a shard shares the lock with the other shards of its plan), written
+// into by its descriptor, and checked before the table is written (a folder removed or replaced
+// meanwhile: OutputError, exit 5). The plan hash (SweepPlan::hash) names what a sweep computes:
+// every point's resolved case and every option that changes a row; OUT/sweep-plan.json holds
+// the hash of the sweep that last took the folder. A sweep that takes a folder whose plan
+// differs removes that plan's sweep.csv, whose rows would describe point folders it is about to
+// replace (that plan's shard tables stay: sweep-merge refuses them by their plan); a shard waits up
+// to kShardLockWait for the first shard of its plan, and is refused (FolderError) while a sweep of
+// another plan holds the folder.
 #include <atomic>
+#include <chrono>
 #include <functional>
 #include <string>
 #include <vector>
@@ -56,7 +68,8 @@ Variation parse_variation(const std::string& text);
 struct Shard {
   int index = 1, count = 1;  ///< 1 <= index <= count
 };
-/// "i/N" with 1 <= i <= N. Throws std::invalid_argument.
+/// "i/N" with 1 <= i <= N. Throws std::invalid_argument (an empty text too: an unset job-array
+/// variable must not run the whole sweep in every task).
 Shard parse_shard(const std::string& text);
 
 struct SweepPoint {
@@ -104,7 +117,11 @@ struct SweepPlan {
   double simulated_seconds = 0;  ///< sum of run.t_end over the runs
   double output_rows = 0;        ///< timeseries rows over the runs (estimate, events excluded)
   double output_bytes = 0;       ///< about 420 bytes a row (21 numbers with 17 digits)
+  std::string hash;              ///< plan hash: 16 hex digits (FNV-1a 64 of the points and options)
 };
+
+/// How long a shard waits for the folder's lock while the first shard of its plan prepares it.
+inline constexpr std::chrono::milliseconds kShardLockWait{2000};
 
 struct SweepOptions {
   std::string case_path;
@@ -177,9 +194,13 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o);
 std::string sweep_csv(const std::vector<std::string>& keys, const std::vector<SweepRow>& rows,
                       bool certify, bool ensemble = false);
 
-/// Joins OUT/sweep-shard-*-of-N.csv into OUT/sweep.csv. Throws std::runtime_error naming the
-/// missing shard, the mismatching header or ensemble settings (the .json sidecars) or the
-/// missing points. Returns the number of rows.
+/// Joins OUT/sweep-shard-*-of-N.csv into OUT/sweep.csv, holding OUT's lock (FolderError while a
+/// sweep runs there). Every shard must come from one plan (the plan hash of its .json sidecar),
+/// be named as rubdyn names it, appear once, and hold only its own points (index % N = i - 1),
+/// each once, every field valid for its column (a number, a count, yes/no, a termination, the
+/// point's folder). Throws std::runtime_error naming the file and line, the column and the value
+/// that break a rule, the mismatching header, plan or ensemble settings, or the missing points.
+/// Returns the number of rows.
 long merge_sweep_shards(const std::string& out);
 
 }  // namespace rubdyn

@@ -20,7 +20,8 @@ namespace rubdyn {
 inline constexpr long kMaxOutputRows = 100'000'000;
 
 /// A case file is read up to this size (1 MiB; the reference case is 2 kB): a larger file, or
-/// a device such as /dev/zero, is refused rather than read without end.
+/// a device such as /dev/zero or a FIFO (anything but a regular file), is refused rather than
+/// read without end.
 inline constexpr std::size_t kMaxCaseBytes = 1 << 20;
 
 /// Reads, overrides, validates. Throws CaseError (every problem listed) on bad input.
@@ -54,7 +55,8 @@ struct CaseEntry {
 /// them; the Python Case reads them).
 std::vector<CaseEntry> case_values(const CaseSpec& c);
 
-/// The output folder of a case: output.folder if set, else "out/<name>".
+/// The output folder of a case: output.folder if set, else "out/<name>". Throws CaseError when
+/// the name cannot name one folder under out/ (empty, ".", ".." or with a "/").
 std::string output_folder(const CaseSpec& c);
 
 }  // namespace rubdyn

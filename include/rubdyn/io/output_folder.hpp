@@ -10,13 +10,21 @@
 // summary.json says "complete": false with the termination and message. The CSV headers are
 // flushed at once, so even a killed run leaves files that the readers accept.
 //
-// The folder is locked (flock on the directory, advisory) for the life of the sink: a second run
-// into it fails at once. Before anything is written the folder is checked: it must be writable,
-// and a summary.json of an earlier run is removed (a folder without summary.json is a run in
-// progress, killed, or failed). Every write is checked (write, flush, close): the first failure
-// is kept (error()), later rows are dropped, the stop flag given to the constructor is raised so
-// that the run ends at its next check, and summary.json, if it can still be written, says
-// "complete": false, termination "output_failure", with the message naming the file.
+// The folder is owned for the life of the sink: it is held open and locked (flock on the
+// directory, advisory), so that a second run into it fails at once, and every file is written
+// relative to the folder held open (write_file_at, open_output_stream_at), so that nothing goes
+// into another folder that took its path. Before anything is written the folder is checked: it
+// must be writable; a summary.json of an earlier run is removed (a folder without summary.json
+// is a run in progress, killed, or failed), and so is what was derived from that run
+// (kDerivedFiles: `rubdyn analyze`'s analysis/ and the figures of `python3 -m rubdyn.plot`),
+// which would describe another run next to ours. Every write is checked (write, flush, close):
+// the first failure is kept (error()), later rows are dropped, the stop flag given to the
+// constructor is raised so that the run ends at its next check, and summary.json, if it can
+// still be written, says "complete": false, termination "output_failure", with the message
+// naming the file. A folder removed or replaced while the run writes (its path no longer leads
+// to the folder held open; checked at every event, every kCheckEverySamples samples and at the
+// end) is such a failure: the summary then goes into the folder held open if it still exists
+// (moved away), never into a new folder at the path.
 #include <atomic>
 #include <cstdio>
 #include <memory>
@@ -37,12 +45,54 @@ class FolderError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// Files derived from a run's output (relative to its folder): removed when a new run takes the
+/// folder, so that they never describe another run than the one beside them. Only regular files
+/// of these names are removed (a link or a folder of that name is left alone), and analysis/
+/// itself when that leaves it empty.
+inline constexpr const char* kDerivedFiles[] = {"analysis/derived.csv",
+                                                "analysis/spectrum.csv",
+                                                "analysis/spectrogram.csv",
+                                                "analysis/campbell.csv",
+                                                "analysis/analysis.json",
+                                                "omega.png",
+                                                "orbit.png",
+                                                "contact.png",
+                                                "friction.png",
+                                                "timeline.png",
+                                                "spectrogram.png"};
+
+/// A folder held open for the object's life, to be locked (flock, advisory: released when the
+/// object goes) and written into by its descriptor.
+class HeldFolder {
+ public:
+  /// Creates `dir` (with its parents) and opens it. Throws FolderError naming the path.
+  explicit HeldFolder(const std::string& dir);
+  ~HeldFolder();
+  HeldFolder(const HeldFolder&) = delete;
+  HeldFolder& operator=(const HeldFolder&) = delete;
+  /// Takes the lock without waiting (exclusive, or shared); false when another holds it.
+  bool try_lock(bool exclusive);
+  /// Throws FolderError unless files can be created in the folder (permissions, read-only file
+  /// system).
+  void check_writable() const;
+  /// The path still leads to the folder held open (it was not removed, moved or replaced).
+  bool intact() const;
+  /// "the output folder DIR was removed or replaced while ...".
+  std::string lost_message() const;
+  int fd() const { return fd_; }
+  const std::string& path() const { return dir_; }
+
+ private:
+  std::string dir_;
+  int fd_ = -1;
+};
+
 class OutputFolder final : public OutputSink {
  public:
   /// Creates `dir` (and parents), locks it, checks that it can be written, removes an old
-  /// summary.json, writes case.resolved.toml, opens the CSV files with headers. Throws
-  /// FolderError naming the path if it cannot (then nothing of this run was written). `stop`,
-  /// when given, is set on the first failed write.
+  /// summary.json and the files derived from it (kDerivedFiles), writes case.resolved.toml,
+  /// opens the CSV files with headers. Throws FolderError naming the path if it cannot (then
+  /// nothing of this run was written). `stop`, when given, is set on the first failed write.
   OutputFolder(const std::string& dir, const CaseSpec& spec, std::atomic<bool>* stop = nullptr);
   ~OutputFolder() override;
   OutputFolder(const OutputFolder&) = delete;
@@ -50,24 +100,31 @@ class OutputFolder final : public OutputSink {
 
   void sample(const Sample& s) override;
   void event(const EventRecord& e) override;
-  /// Closes the CSV files (checked) and writes summary.json (atomically: a temporary file
-  /// renamed). Throws OutputError when summary.json cannot be written.
+  /// Closes the CSV files (checked), checks that the folder is still the one held, and writes
+  /// summary.json (atomically: a temporary file renamed). Throws OutputError when summary.json
+  /// cannot be written; its message starts with the first failed write.
   void end(const RunSummary& s) override;
 
   const std::string& dir() const { return dir_; }
-  /// The first failed write ("cannot write DIR/FILE: reason"), empty when all succeeded.
+  /// The first failed write ("cannot write DIR/FILE: reason", or the folder lost), empty when
+  /// all succeeded.
   const std::string& error() const { return error_; }
+
+  /// Samples between two checks that the folder is still the one held (two stat calls).
+  static constexpr int kCheckEverySamples = 1024;
 
  private:
   void failed(const std::string& file);
+  void check_folder();
   std::string dir_;
+  std::unique_ptr<HeldFolder> folder_;
   std::vector<SampleColumn> columns_;       // timeseries.csv (io/columns.hpp)
   std::vector<EventColumn> event_columns_;  // events.csv
   int n_dofs_ = 0, n_contacts_ = 0, n_observables_ = 0;
   std::string buf_;  // one row
   std::FILE* ts_ = nullptr;
   std::FILE* ev_ = nullptr;
-  int lock_fd_ = -1;
+  int since_check_ = 0;
   std::atomic<bool>* stop_ = nullptr;
   std::string error_;
 };

@@ -1,5 +1,6 @@
 #pragma once
 // Small text-file helpers shared by the readers and writers of output folders.
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -26,9 +27,40 @@ std::string quoted_string(std::string_view text);
 /// (or a full disk) and may hold a truncated number. Readers drop it with this warning.
 std::string cut_row_warning(const std::string& file, long line);
 
-/// Writes `text` to path + ".tmp" and renames it to `path`, so that a reader (or a failure) never
-/// sees a half-written file. Every step is checked (open, write, flush, close, rename). Throws
-/// OutputError naming the path.
+/// An output path that rubdyn refuses to write (a directory, a block device, a link to nothing,
+/// a FIFO without a reader, an empty path): nothing was written, the CLI exits 2.
+class PathRefused : public OutputError {
+ public:
+  using OutputError::OutputError;
+};
+
+// The one place where rubdyn opens a path for writing (README.md, "Output paths"). What is done
+// depends on what the path is when it is opened:
+//  - nothing, or a regular file: a whole file (write_file_atomic) is written to PATH.tmp and
+//    renamed onto PATH, so that a reader never sees half of it; a stream (open_output_stream) is
+//    created or truncated;
+//  - the file the standard output goes to (/dev/stdout, /proc/self/fd/1, or the file stdout is
+//    redirected to): written to the standard output, after what is already printed there;
+//  - a symbolic link: never replaced; the file it points to is written through (as below for a
+//    device, FIFO or socket; a regular file is truncated and rewritten in place, not atomically);
+//    a link to nothing is refused;
+//  - a character device, FIFO or socket: written through, never replaced or created; a FIFO
+//    without a reader is refused (PathRefused) instead of waited for;
+//  - a directory or a block device: refused (PathRefused).
+// Every step is checked (open, write, close, rename); a failure throws OutputError naming the
+// path ("cannot write PATH: reason"). `dir_fd` (an open directory, or AT_FDCWD) is the folder
+// `name` is relative to, so that an output folder's files go into the folder the run holds
+// open even if its path is moved; `shown` is the path named in messages.
+
+/// Writes `text` to `path` by the rule above.
 void write_file_atomic(const std::string& path, const std::string& text);
+/// The same, `name` relative to the open directory `dir_fd`.
+void write_file_at(int dir_fd, const std::string& name, const std::string& shown,
+                   const std::string& text);
+/// Opens `name` (relative to `dir_fd`) for streamed writing by the rule above; never null.
+std::FILE* open_output_stream_at(int dir_fd, const std::string& name, const std::string& shown);
+/// Throws PathRefused when `path` would be refused by the rule above (checked before any work
+/// whose result goes there; a FIFO's reader is only checked when it is opened).
+void check_output_path(const std::string& path);
 
 }  // namespace rubdyn
