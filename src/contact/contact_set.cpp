@@ -131,7 +131,7 @@ struct ContactSetSolver::EnumWork {
     double r[kCapRows], u[kCapRows];
     Level level;
     int key;
-    bool excluded;
+    bool alive;            // not dropped by tie rule 1
     std::uint8_t in_band;  // bit i: contact i has a margin within the band
   };
   Candidate cand[kCapModes];
@@ -257,7 +257,6 @@ EnumResult ContactSetSolver::EnumWork::run(MatIn W, VecIn u0, std::span<const Se
     int failing = 0;
     double violation = 0.0;
     std::uint8_t fail_mask = 0, band_mask = 0;
-    bool excluded = false;
     for (int i = 0; i < K; ++i) {
       const double rN = r[2 * i], rT = r[2 * i + 1], uN = u[2 * i], uT = u[2 * i + 1];
       Level li = Level::Strict;
@@ -287,7 +286,6 @@ EnumResult ContactSetSolver::EnumWork::run(MatIn W, VecIn u0, std::span<const Se
       } else if (li == Level::Boundary) {
         band_mask |= static_cast<std::uint8_t>(1u << i);
       }
-      excluded |= c[i].excluded && *c[i].excluded == mode[i];
     }
     const int key = (n_closed * (kCapK + 1) + n_slip) * kCapModes + lex;
     if (lv == Level::Violated) {
@@ -307,16 +305,23 @@ EnumResult ContactSetSolver::EnumWork::run(MatIn W, VecIn u0, std::span<const Se
     std::copy_n(u, 2 * K, cd.u);
     cd.level = lv;
     cd.key = key;
-    cd.excluded = excluded;
+    cd.alive = true;
     cd.in_band = band_mask;
   }
-  // tie rule 1: excluded combinations dropped while another is consistent
-  bool other = false;
-  for (int k = 0; k < n; ++k) other |= !cand[k].excluded;
+  // tie rule 1, contact by contact in index order: contact i's excluded mode is dropped while a
+  // consistent combination with contact i in another mode remains
+  for (int i = 0; i < K; ++i) {
+    if (!c[i].excluded) continue;
+    const Phase ex = *c[i].excluded;
+    bool other = false;
+    for (int k = 0; k < n; ++k) other |= cand[k].alive && cand[k].mode[i] != ex;
+    if (other)
+      for (int k = 0; k < n; ++k) cand[k].alive &= cand[k].mode[i] != ex;
+  }
   // tie rules 2-3
   int pick_strict = -1, pick_boundary = -1;
   for (int k = 0; k < n; ++k) {
-    if (other && cand[k].excluded) continue;
+    if (!cand[k].alive) continue;
     ++out.n_consistent;
     if (cand[k].level == Level::Strict) {
       ++out.n_strict;
@@ -343,7 +348,7 @@ EnumResult ContactSetSolver::EnumWork::run(MatIn W, VecIn u0, std::span<const Se
   int other_pick = -1;
   for (int k = 0; k < n; ++k) {
     const Candidate& q = cand[k];
-    if (other && q.excluded) continue;
+    if (!q.alive) continue;
     for (int e = 0; e < 2 * K; ++e) {
       out.r_spread = std::max(out.r_spread, std::abs(q.r[e] - p.r[e]));
       out.u_spread = std::max(out.u_spread, std::abs(q.u[e] - p.u[e]));

@@ -30,8 +30,9 @@
 // tol_r for margins on r (times mu for the cone). A combination's level is its weakest margin's.
 //
 // THE TIE RULE (K = 1: exactly the one-contact kernel's):
-//   1. A combination in which some contact i is in its `excluded` mode is dropped while a
-//      consistent combination without an excluded mode exists.
+//   1. Contact by contact in index order: the combinations with contact i in its `excluded`
+//      mode are dropped while a consistent combination with contact i in another mode remains
+//      (for decoupled contacts: each contact's own rule 1).
 //   2. The first Strict combination, else the first Boundary one, in the order of least contact
 //      effort: fewest closed contacts (not free), then fewest slipping contacts with mu > 0
 //      (dissipating ones), then contact 0's mode first, contact 1's next, ... in the order free,
