@@ -26,6 +26,7 @@ SetBand contact_set_band(MatIn W, VecIn u0, double rel_band) {
   b.tol_u = rel_band * u0.cwiseAbs().sum() + 1e-300;
   double w_min = std::numeric_limits<double>::infinity();
   for (Eigen::Index i = 0; 2 * i < W.rows(); ++i) w_min = std::min(w_min, W(2 * i, 2 * i));
+  if (W.rows() == 0) w_min = 1.0;  // no contact: any positive band
   b.tol_r = b.tol_u / std::max(w_min, 1e-300);
   return b;
 }
