@@ -10,7 +10,10 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstring>
 #include <exception>
+#include <filesystem>
+#include <fstream>
 #include <future>
 #include <optional>
 #include <string>
@@ -41,17 +44,42 @@ std::string fmt_size(const char* what, Eigen::Index got, int want) {
          std::to_string(want);
 }
 
-/// A validated case and how it was made: run() reloads the file with the extra overrides, as the
-/// CLI does (load_case(path, --set ... + solver options)), so that the numbers are the CLI's.
+/// A validated case and how it was made: run() re-parses its text with the extra overrides, as
+/// the CLI parses the file with them (load_case(path, --set ... + solver options)), so that the
+/// numbers are the CLI's. The text is a snapshot taken when the case was loaded: editing the file
+/// afterwards changes nothing.
 struct Case {
   CaseSpec spec;
   std::string path;                    ///< empty when the case came from TOML text
-  std::string text;                    ///< the TOML text (when path is empty)
+  std::string text;                    ///< the TOML text (of the file, as it was loaded)
   std::vector<std::string> overrides;  ///< "section.key=value"
 };
 
+/// The text of a case file, read as load_case reads it (binary, at most kMaxCaseBytes + 1
+/// bytes); nullopt for whatever load_case refuses before parsing (a folder, an unreadable or
+/// too large file, NUL bytes).
+std::optional<std::string> case_text(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) return std::nullopt;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::nullopt;
+  std::string text(kMaxCaseBytes + 1, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  if (in.bad()) return std::nullopt;
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  if (text.size() > kMaxCaseBytes || text.find('\0') != std::string::npos) return std::nullopt;
+  return text;
+}
+
 Case make_case_from_file(const std::string& path, const std::vector<std::string>& overrides) {
-  return Case{load_case(path, overrides), path, {}, overrides};
+  std::optional<std::string> text = case_text(path);
+  if (!text) {
+    load_case(path, overrides);  // throws the CLI's CaseError for this file
+    // it did not: the file changed between the two reads
+    throw CaseError({{path, 0, "(file)", "", "changed while it was read: load it again"}});
+  }
+  CaseSpec spec = parse_case(*text, path, overrides);  // what load_case does with the text
+  return Case{std::move(spec), path, std::move(*text), overrides};
 }
 
 Case make_case_from_text(const std::string& text, const std::string& source,
@@ -61,12 +89,14 @@ Case make_case_from_text(const std::string& text, const std::string& source,
   return c;
 }
 
-/// The case with more overrides on top (later ones win), loaded the way the CLI loads it.
+/// The case with more overrides on top (later ones win), parsed from the case's snapshot of its
+/// text the way the CLI parses the file.
 Case with_overrides(const Case& c, const std::vector<std::string>& more) {
   std::vector<std::string> all = c.overrides;
   all.insert(all.end(), more.begin(), more.end());
-  if (!c.path.empty()) return make_case_from_file(c.path, all);
-  return make_case_from_text(c.text, c.spec.source, all);
+  Case out = make_case_from_text(c.text, c.spec.source, all);
+  out.path = c.path;
+  return out;
 }
 
 template <class T>
@@ -185,17 +215,31 @@ py::tuple run_case(const Case& c, const py::object& progress, double progress_in
                         summary_json(summary));
 }
 
-Series series_from(const std::string& source, std::vector<double> t, std::vector<std::string> names,
-                   std::vector<std::vector<double>> values) {
+/// A numpy array (any real dtype, any stride) as a vector of doubles; `what` names it in errors.
+std::vector<double> doubles(const py::handle& h, const std::string& what) {
+  py::array_t<double, py::array::c_style | py::array::forcecast> a;
+  try {
+    a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(h);
+  } catch (const py::error_already_set&) {
+  }
+  if (!a) throw py::type_error(what + ": not an array of numbers");
+  if (a.ndim() != 1) {
+    throw py::value_error(what + ": " + std::to_string(a.ndim()) +
+                          "-dimensional, a column is one-dimensional");
+  }
+  return std::vector<double>(a.data(), a.data() + a.size());
+}
+
+/// A Series from Python's arrays (compare_solutions checks lengths, times and windows).
+Series series_from(const std::string& source, const py::handle& t,
+                   const std::vector<std::string>& names, const py::list& values) {
   Series s;
   s.source = source;
-  s.t = std::move(t);
-  s.names = std::move(names);
-  s.values = std::move(values);
-  if (s.names.size() != s.values.size()) throw std::invalid_argument("names and values differ");
-  for (const auto& v : s.values) {
-    if (v.size() != s.t.size()) throw std::invalid_argument("a column's length differs from t's");
-  }
+  s.t = doubles(t, source + "['t']");
+  s.names = names;
+  if (names.size() != values.size()) throw py::value_error(source + ": names and values differ");
+  for (std::size_t c = 0; c < names.size(); ++c)
+    s.values.push_back(doubles(values[c], source + "['" + names[c] + "']"));
   return s;
 }
 
@@ -225,7 +269,8 @@ py::dict campbell_dict(const CampbellDiagram& d) {
 /// `rubdyn analyze` on samples held in memory (columns named as in timeseries.csv, phase as
 /// codes): the verdicts as analysis.json writes them, and derived.csv's columns.
 py::tuple analyze_columns(const Case& c, const py::dict& columns, long events, double min_turns,
-                          std::optional<double> t0, std::optional<double> t1) {
+                          std::optional<double> t0, std::optional<double> t1,
+                          const std::string& source) {
   AnalysisOptions o;
   o.min_turns = min_turns;
   o.t0 = t0;
@@ -239,7 +284,7 @@ py::tuple analyze_columns(const Case& c, const py::dict& columns, long events, d
   const auto t = col("t");
   const std::size_t n = static_cast<std::size_t>(t.size());
   RunRecord r;
-  r.dir = c.spec.source;
+  r.dir = source;  // names the samples in messages
   r.spec = c.spec;
   r.events = events;
   const std::unique_ptr<LagrangianModel> model = build_model(c.spec);
@@ -305,9 +350,17 @@ PYBIND11_MODULE(_core, m) {
   // CaseError(ValueError): str() is the CLI's message; .issues lists (file, line, key, value,
   // rule) dicts.
   static py::exception<CaseError> case_error(m, "CaseError", PyExc_ValueError);
+  // ReadError(ValueError): a malformed output folder or CSV file; str() is the CLI's message
+  // ("file:line: problem"), .file and .line (0: the file as a whole) name the place.
+  static py::exception<ReadError> read_error(m, "ReadError", PyExc_ValueError);
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
+    } catch (const ReadError& e) {
+      py::object exc = py::handle(read_error.ptr())(py::str(e.what()));
+      exc.attr("file") = py::str(e.file());
+      exc.attr("line") = e.line();
+      PyErr_SetObject(read_error.ptr(), exc.ptr());
     } catch (const CaseError& e) {
       py::list issues;
       for (const auto& i : e.issues()) {
@@ -409,7 +462,8 @@ PYBIND11_MODULE(_core, m) {
         py::arg("overrides") = std::vector<std::string>{});
   m.def("with_overrides", &with_overrides, py::arg("case"), py::arg("overrides"));
   m.def("analyze", &analyze_columns, py::arg("case"), py::arg("columns"), py::arg("events"),
-        py::arg("min_turns"), py::arg("t0") = py::none(), py::arg("t1") = py::none());
+        py::arg("min_turns"), py::arg("t0") = py::none(), py::arg("t1") = py::none(),
+        py::arg("source") = "result");
   m.def("run", &run_case, py::arg("case"), py::arg("progress") = py::none(),
         py::arg("progress_interval") = 0.1,
         "(columns, events, summary_json) of one run; the GIL is released while it runs");
@@ -432,12 +486,7 @@ PYBIND11_MODULE(_core, m) {
         RunFiles f;
         {
           py::gil_scoped_release release;
-          try {
-            f = read_run_files(dir);
-          } catch (const std::runtime_error& e) {  // a bad file: its name, line, column
-            py::gil_scoped_acquire acquire;
-            throw py::value_error(e.what());
-          }
+          f = read_run_files(dir);  // ReadError (file, line, column) or CaseError
         }
         const int contacts = f.model->contact_count();
         py::object summary = py::none();
@@ -450,30 +499,37 @@ PYBIND11_MODULE(_core, m) {
       "reader (io/output_reader.hpp): the columns by the model's column table, the events by "
       "events.csv's; a cut last row is dropped with a warning");
 
-  // rubdyn compare: the C++ readers and measures, returned as comparison_json's text and the
-  // CLI's report.
+  // rubdyn compare: the C++ readers (compare.hpp's read_series / read_events, which read through
+  // io/output_reader's CSV reader, exactly as `rubdyn compare` reads) and measures, returned as
+  // comparison_json's text and the CLI's report.
   m.def(
-      "compare_paths",
-      [](const std::string& a, const std::string& b,
-         std::optional<std::pair<double, double>> window, double event_tol) {
-        const Comparison c = compare_solutions(read_series(a), read_series(b), read_events(a),
-                                               read_events(b), window, event_tol);
-        return py::make_tuple(comparison_json(c, a, b), comparison_report(c, a, b));
+      "read_solution",
+      [](const std::string& path) {
+        Series s;
+        std::vector<TimedEvent> ev;
+        {
+          py::gil_scoped_release release;
+          s = read_series(path);
+          ev = read_events(path);
+        }
+        py::list values;
+        for (auto& v : s.values) values.append(to_array(std::move(v)));
+        py::list events;
+        for (const auto& e : ev) events.append(py::make_tuple(e.t, e.kind));
+        return py::make_tuple(to_array(std::move(s.t)), s.names, values, events, s.warnings);
       },
-      py::arg("a"), py::arg("b"), py::arg("window") = py::none(), py::arg("event_tol") = 1e-3);
+      py::arg("path"),
+      "(t, names, values, events, warnings) of an output folder or CSV file, read as `rubdyn "
+      "compare` reads it");
   m.def(
       "compare_series",
-      [](const std::string& name_a, std::vector<double> t_a, std::vector<std::string> names_a,
-         std::vector<std::vector<double>> values_a,
-         const std::vector<std::pair<double, std::string>>& events_a, const std::string& name_b,
-         std::vector<double> t_b, std::vector<std::string> names_b,
-         std::vector<std::vector<double>> values_b,
-         const std::vector<std::pair<double, std::string>>& events_b,
+      [](const std::string& name_a, const py::handle& t_a, const std::vector<std::string>& names_a,
+         const py::list& values_a, const std::vector<std::pair<double, std::string>>& events_a,
+         const std::string& name_b, const py::handle& t_b, const std::vector<std::string>& names_b,
+         const py::list& values_b, const std::vector<std::pair<double, std::string>>& events_b,
          std::optional<std::pair<double, double>> window, double event_tol) {
-        const Series a =
-            series_from(name_a, std::move(t_a), std::move(names_a), std::move(values_a));
-        const Series b =
-            series_from(name_b, std::move(t_b), std::move(names_b), std::move(values_b));
+        const Series a = series_from(name_a, t_a, names_a, values_a);
+        const Series b = series_from(name_b, t_b, names_b, values_b);
         const Comparison c = compare_solutions(a, b, events_from(events_a), events_from(events_b),
                                                window, event_tol);
         return py::make_tuple(comparison_json(c, name_a, name_b),

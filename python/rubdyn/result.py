@@ -86,19 +86,39 @@ def read(out_dir):
     """Reads an output folder written by `rubdyn run` (timeseries.csv, events.csv, summary.json,
     case.resolved.toml) through the C++ reader the CLI uses (io/output_reader.hpp), so the columns
     are the model's column table and the numbers come back bit for bit.
-    A run that died keeps its rows: a cut last row is dropped with a warning, a missing
-    summary.json gives summary None (with a warning). A folder without timeseries.csv is
-    FileNotFoundError; a malformed file is ValueError naming the file, line and column."""
-    out_dir = os.fspath(out_dir)
+    A run that died keeps its rows: a cut last row is dropped with a warning, a missing (or
+    empty) summary.json gives summary None (with a warning). A folder without timeseries.csv is
+    FileNotFoundError; a malformed file (not text, a short row, a field that is not a number, a
+    time that is not finite or goes back, a summary.json that is not JSON) is rubdyn.ReadError,
+    a ValueError whose message and .file, .line name the file and line."""
+    if not isinstance(out_dir, (str, os.PathLike)):
+        raise TypeError(f"read: out_dir must be a path (str or os.PathLike), not "
+                        f"{type(out_dir).__name__}")
+    out_dir = os.fsdecode(os.fspath(out_dir))
     if not os.path.exists(os.path.join(out_dir, "timeseries.csv")):
         raise FileNotFoundError(f"{out_dir}: no timeseries.csv (not a rubdyn output folder)")
     columns, events, summary_json, notes = _core.read_run(out_dir)
     for note in notes:
         warnings.warn(note, RuntimeWarning, stacklevel=2)
-    summary = json.loads(summary_json) if summary_json is not None else None
-    if summary is None:
+    summary_path = os.path.join(out_dir, "summary.json")
+    summary = None
+    if summary_json is not None:
+        try:
+            summary = json.loads(summary_json)
+        except ValueError as e:
+            raise _read_error(summary_path, getattr(e, "lineno", 0), f"not JSON: {e}") from None
+        if not isinstance(summary, dict):
+            raise _read_error(summary_path, 1, "not a JSON object")
+    elif not os.path.exists(summary_path):  # (an empty one: the reader's warning above)
         warnings.warn(f"{out_dir}: no summary.json (the run did not finish)", RuntimeWarning,
                       stacklevel=2)
     case = _core.load_case(os.path.join(out_dir, "case.resolved.toml"), [])
     return Result(dict(columns), _events_array(events, len(events["t"])), summary, case=case,
                   source=out_dir)
+
+
+def _read_error(file, line, problem):
+    """rubdyn.ReadError as the C++ reader raises it: "file:line: problem", .file, .line."""
+    err = _core.ReadError(f"{file}:{line}: {problem}" if line else f"{file}: {problem}")
+    err.file, err.line = file, line
+    return err

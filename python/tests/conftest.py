@@ -36,3 +36,12 @@ def cli_reference_out(cli, tmp_path_factory):
                 "--quiet")
     assert p.returncode == 0, p.stderr
     return out
+
+
+@pytest.fixture(scope="session")
+def small_out(cli, tmp_path_factory):
+    """The reference case for 10 ms written by the CLI (an impact, slip): a folder to damage."""
+    out = tmp_path_factory.mktemp("cli") / "small"
+    p = run_cli(cli, "run", REFERENCE, "--t-end", "0.01", "--out", str(out), "--quiet")
+    assert p.returncode == 0, p.stderr
+    return out

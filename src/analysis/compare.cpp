@@ -50,7 +50,7 @@ Series read_series(const std::string& path) {
   s.source = file;
   s.warnings = table.warnings;
   const int tcol = table.column("t");
-  if (tcol < 0) throw std::runtime_error(fmt::format("{}:1: no column named t", file));
+  if (tcol < 0) throw ReadError(file, 1, "no column named t");
   std::vector<int> cols;  // the numeric columns, decided on the first data row
   for (std::size_t k = 0; k < table.rows.size(); ++k) {
     const auto& f = table.rows[k];
@@ -67,23 +67,27 @@ Series read_series(const std::string& path) {
     }
     double t;
     if (!parse_number(f[tcol], t) || !std::isfinite(t)) {
-      throw std::runtime_error(
-          fmt::format("{}:{}: t = '{}' is not a finite number", file, lineno, f[tcol]));
+      throw ReadError(file, lineno,
+                      fmt::format("t = '{}' is not a finite number", printable(f[tcol])));
     }
-    if (!s.t.empty() && t < s.t.back()) {
-      throw std::runtime_error(fmt::format("{}:{}: t = {} decreases", file, lineno, t));
-    }
+    if (!s.t.empty() && t < s.t.back())
+      throw ReadError(file, lineno, fmt::format("t = {} decreases", t));
     s.t.push_back(t);
     for (std::size_t c = 0; c < cols.size(); ++c) {
       double x;
       if (!parse_number(f[cols[c]], x)) {
-        throw std::runtime_error(
-            fmt::format("{}:{}: {} = '{}' is not a number", file, lineno, s.names[c], f[cols[c]]));
+        throw ReadError(
+            file, lineno,
+            fmt::format("{} = '{}' is not a number", printable(s.names[c]), printable(f[cols[c]])));
       }
       s.values[c].push_back(x);
     }
   }
-  if (s.t.size() < 2) throw std::runtime_error(fmt::format("{}: fewer than two samples", file));
+  if (s.t.size() < 2) {
+    throw ReadError(file, 0,
+                    fmt::format("{} sample{}: compare needs at least two", s.t.size(),
+                                s.t.size() == 1 ? "" : "s"));
+  }
   return s;
 }
 
@@ -97,17 +101,52 @@ std::vector<TimedEvent> read_events(const std::string& path) {
   const CsvTable table = read_csv(file, true);
   if (table.header.empty()) return out;
   const int tc = table.column("t"), kc = table.column("kind");
-  if (tc < 0 || kc < 0)
-    throw std::runtime_error(fmt::format("{}:1: needs columns t and kind", file));
+  if (tc < 0 || kc < 0) throw ReadError(file, 1, "needs columns t and kind");
   for (std::size_t k = 0; k < table.rows.size(); ++k) {
     double t;
-    if (!parse_number(table.rows[k][tc], t)) {
-      throw std::runtime_error(fmt::format("{}:{}: malformed event row", file, table.line_of[k]));
+    if (!parse_number(table.rows[k][tc], t) || !std::isfinite(t)) {
+      throw ReadError(file, table.line_of[k],
+                      fmt::format("t = '{}' is not a finite time", printable(table.rows[k][tc])));
     }
     out.push_back({t, table.rows[k][kc]});
   }
   return out;
 }
+
+namespace {
+
+/// The rules compare_solutions states for one solution (compare.hpp).
+void check_series(const Series& s, const std::vector<TimedEvent>& events) {
+  auto bad = [&s](const std::string& what) {
+    return std::invalid_argument(fmt::format("compare: {}: {}", s.source, what));
+  };
+  if (s.names.size() != s.values.size()) {
+    throw bad(fmt::format("{} column names for {} columns", s.names.size(), s.values.size()));
+  }
+  if (s.t.size() < 2) throw bad(fmt::format("{} samples: compare needs at least two", s.t.size()));
+  for (std::size_t i = 0; i < s.t.size(); ++i) {
+    if (!std::isfinite(s.t[i]))
+      throw bad(fmt::format("t[{}] = {}: times must be finite", i, s.t[i]));
+    if (i > 0 && s.t[i] < s.t[i - 1]) {
+      throw bad(fmt::format("t[{}] = {} < t[{}] = {}: times must not decrease", i, s.t[i], i - 1,
+                            s.t[i - 1]));
+    }
+  }
+  for (std::size_t c = 0; c < s.values.size(); ++c) {
+    if (s.values[c].size() != s.t.size()) {
+      throw bad(fmt::format("column {} has {} values, t has {}", printable(s.names[c]),
+                            s.values[c].size(), s.t.size()));
+    }
+  }
+  for (std::size_t k = 0; k < events.size(); ++k) {
+    if (!std::isfinite(events[k].t)) {
+      throw bad(fmt::format("event {} ({}) at t = {}: times must be finite", k,
+                            printable(events[k].kind), events[k].t));
+    }
+  }
+}
+
+}  // namespace
 
 double Comparison::max_event_shift() const {
   double m = 0.0;
@@ -118,6 +157,18 @@ double Comparison::max_event_shift() const {
 Comparison compare_solutions(const Series& a, const Series& b, const std::vector<TimedEvent>& ea,
                              const std::vector<TimedEvent>& eb,
                              std::optional<std::pair<double, double>> window, double event_tol) {
+  check_series(a, ea);
+  check_series(b, eb);
+  if (window && !(std::isfinite(window->first) && std::isfinite(window->second) &&
+                  window->first < window->second)) {
+    throw std::invalid_argument(
+        fmt::format("compare: window [{}, {}]: must be two finite times t0 < t1", window->first,
+                    window->second));
+  }
+  if (!(std::isfinite(event_tol) && event_tol > 0.0)) {
+    throw std::invalid_argument(
+        fmt::format("compare: event_tol = {}: must be finite and > 0 [s]", event_tol));
+  }
   Comparison c;
   c.t0 = std::max(a.t.front(), b.t.front());
   c.t1 = std::min(a.t.back(), b.t.back());
@@ -125,7 +176,13 @@ Comparison compare_solutions(const Series& a, const Series& b, const std::vector
     c.t0 = std::max(c.t0, window->first);
     c.t1 = std::min(c.t1, window->second);
   }
-  if (!(c.t1 > c.t0)) throw std::runtime_error("the two solutions do not overlap in the window");
+  if (!(c.t1 > c.t0)) {
+    const std::string in_window =
+        window ? fmt::format(" inside the window [{}, {}]", window->first, window->second) : "";
+    throw std::invalid_argument(fmt::format("compare: {} [{}, {}] and {} [{}, {}] share no time{}",
+                                            a.source, a.t.front(), a.t.back(), b.source,
+                                            b.t.front(), b.t.back(), in_window));
+  }
   std::vector<double> times;
   for (const auto* s : {&a, &b})
     for (double t : s->t)
@@ -165,7 +222,7 @@ Comparison compare_solutions(const Series& a, const Series& b, const std::vector
   if (c.columns.empty()) {
     std::string names;
     for (const char* n : kStandard) names += (names.empty() ? "" : ", ") + std::string(n);
-    throw std::runtime_error(
+    throw std::invalid_argument(
         fmt::format("nothing to compare: {} and {} have none of the columns {} in common", a.source,
                     b.source, names));
   }

@@ -71,7 +71,24 @@ std::vector<char> sustained_runs(const std::vector<DerivedSample>& d, double t0,
 // The window [t0, t1] of the options, clipped to the run.
 std::pair<double, double> window_of(const RunRecord& r, const AnalysisOptions& o) {
   if (r.samples.empty()) throw std::invalid_argument(r.dir + ": timeseries.csv has no rows");
+  // the samples may come from memory (Python's analyze) rather than the reader, which checks
+  // the same: a NaN time would drop out of every comparison below and of the window's clipping
+  for (std::size_t i = 0; i < r.samples.size(); ++i) {
+    const double t = r.samples[i].t;
+    if (!std::isfinite(t))
+      throw std::invalid_argument(fmt::format("{}: sample {}: t = {} is not finite", r.dir, i, t));
+    if (i > 0 && t < r.samples[i - 1].t) {
+      throw std::invalid_argument(
+          fmt::format("{}: sample {}: t = {} < {} (the sample before): "
+                      "times must not decrease",
+                      r.dir, i, t, r.samples[i - 1].t));
+    }
+  }
   const double a = r.samples.front().t, b = r.samples.back().t;
+  if (!std::isfinite(o.t0.value_or(a)) || !std::isfinite(o.t1.value_or(b))) {
+    throw std::invalid_argument(fmt::format("analysis window [{}, {}]: times must be finite",
+                                            o.t0.value_or(a), o.t1.value_or(b)));
+  }
   const double t0 = std::max(a, o.t0.value_or(a)), t1 = std::min(b, o.t1.value_or(b));
   if (!(t1 > t0)) {
     throw std::invalid_argument(
@@ -411,6 +428,11 @@ std::vector<std::string> analysis_option_problems(const AnalysisOptions& o) {
   rule(o.overlap >= 0 && o.overlap < 1, "--overlap", o.overlap, "must lie in [0, 1)");
   rule(o.pad >= 1, "--pad", o.pad, "must be >= 1");
   rule(std::isfinite(o.f_max) && o.f_max > 0, "--fmax", o.f_max, "must be finite and > 0 [Hz]");
+  // the analysis window: NaN would pass through std::max / std::min as the run's own bounds
+  if (o.t0) rule(std::isfinite(*o.t0), "--t-window t0", *o.t0, "must be finite [s]");
+  if (o.t1) rule(std::isfinite(*o.t1), "--t-window t1", *o.t1, "must be finite [s]");
+  if (o.t0 && o.t1 && std::isfinite(*o.t0) && std::isfinite(*o.t1))
+    rule(*o.t0 < *o.t1, "--t-window t1", *o.t1, "must be > t0");
   return bad;
 }
 

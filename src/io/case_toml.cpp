@@ -372,6 +372,15 @@ class Loader {
     for (const auto& ov : overrides) {
       const auto eq = ov.find('=');
       const std::string lhs = eq == std::string::npos ? ov : ov.substr(0, eq);
+      // one override sets one key: a line end would let the TOML value carry more keys
+      // ("0.3\ncontact.e_n=0.5"), which the parse below would silently drop
+      if (std::any_of(ov.begin(), ov.end(), [](char ch) {
+            return (static_cast<unsigned char>(ch) < 0x20 && ch != '\t') || ch == 0x7f;
+          })) {
+        issues_.push_back({"--set", 0, "(override)", toml_quote(ov),
+                           "an override is one line: no line end or other control character"});
+        continue;
+      }
       const auto dot = lhs.find('.');
       if (eq == std::string::npos || dot == std::string::npos || dot == 0 ||
           dot + 1 == lhs.size()) {

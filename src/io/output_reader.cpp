@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <charconv>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -16,6 +17,25 @@
 
 namespace rubdyn {
 
+ReadError::ReadError(std::string file, long line, const std::string& problem)
+    : std::runtime_error(line > 0 ? fmt::format("{}:{}: {}", file, line, problem)
+                                  : fmt::format("{}: {}", file, problem)),
+      file_(std::move(file)),
+      line_(line) {}
+
+std::string printable(std::string_view text, std::size_t max) {
+  std::string out;
+  for (std::size_t i = 0; i < text.size() && i < max; ++i) {
+    const auto b = static_cast<unsigned char>(text[i]);
+    if (b >= 0x20 && b < 0x7f)
+      out += static_cast<char>(b);
+    else
+      out += fmt::format("\\x{:02x}", b);
+  }
+  if (text.size() > max) out += "...";
+  return out;
+}
+
 int CsvTable::column(std::string_view name) const {
   for (std::size_t c = 0; c < header.size(); ++c)
     if (header[c] == name) return static_cast<int>(c);
@@ -24,27 +44,77 @@ int CsvTable::column(std::string_view name) const {
 
 namespace {
 
+/// Throws ReadError unless `line` is text: valid UTF-8 without NUL or other control characters
+/// (a tab is allowed). rubdyn writes ASCII; a binary or corrupted file stops here, before any
+/// of its bytes reach a message or Python (which needs UTF-8).
+void require_text(const std::string& path, long ln, const std::string& line) {
+  const auto* p = reinterpret_cast<const unsigned char*>(line.data());
+  const std::size_t n = line.size();
+  for (std::size_t i = 0; i < n;) {
+    const unsigned char b = p[i];
+    std::size_t len = 0;
+    if (b >= 0x20 && b < 0x7f) {
+      ++i;
+      continue;
+    }
+    if (b == '\t') {
+      ++i;
+      continue;
+    }
+    if (b >= 0xc2 && b <= 0xdf)
+      len = 2;
+    else if (b >= 0xe0 && b <= 0xef)
+      len = 3;
+    else if (b >= 0xf0 && b <= 0xf4)
+      len = 4;
+    bool ok = len > 0 && i + len <= n;
+    for (std::size_t k = 1; ok && k < len; ++k) ok = (p[i + k] & 0xc0) == 0x80;
+    if (ok && len == 3) {  // no overlong forms, no UTF-16 surrogates
+      ok = !(b == 0xe0 && p[i + 1] < 0xa0) && !(b == 0xed && p[i + 1] >= 0xa0);
+    } else if (ok && len == 4) {  // no overlong forms, nothing above U+10FFFF
+      ok = !(b == 0xf0 && p[i + 1] < 0x90) && !(b == 0xf4 && p[i + 1] >= 0x90);
+    }
+    if (!ok) {
+      throw ReadError(path, ln,
+                      fmt::format("byte 0x{:02x} at column {}: not text (a binary or corrupted "
+                                  "file; rubdyn writes UTF-8 text without control characters)",
+                                  b, i + 1));
+    }
+    i += len;
+  }
+}
+
 /// Reads `path` line by line: the header, then each row with its line number. A last row
-/// without its line end is dropped with a warning (cut_row_warning); blank lines are skipped.
+/// without its line end is dropped with a warning (cut_row_warning); blank lines are skipped;
+/// a CRLF line end is read as LF; every line read must be text (require_text).
 /// Returns false for a file without a header line.
 template <class OnHeader, class OnRow>
 bool for_each_line(const std::string& path, std::vector<std::string>& warnings, OnHeader header,
                    OnRow row) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(fmt::format("{}: cannot read", path));
+  std::ifstream in(path, std::ios::binary);
+  if (!in || std::filesystem::is_directory(path)) throw ReadError(path, 0, "cannot read");
   std::string line;
+  auto chomp = [&line] {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+  };
   if (!std::getline(in, line)) return false;
+  chomp();
+  require_text(path, 1, line);
   header(line);
   long ln = 1;
   while (std::getline(in, line)) {
     ++ln;
+    const bool cut = in.eof();  // no line end: cut short
+    chomp();
     if (line.empty()) continue;
-    if (in.eof()) {  // no line end: cut short
+    if (cut) {
       warnings.push_back(cut_row_warning(path, ln));
       break;
     }
+    require_text(path, ln, line);
     row(line, ln);
   }
+  if (in.bad()) throw ReadError(path, ln, "read error");
   return true;
 }
 
@@ -62,15 +132,16 @@ CsvTable read_csv(const std::string& path, bool empty_ok) {
       [&](const std::string& line, long ln) {
         auto fields = split_csv_line(line);
         if (fields.size() != t.header.size()) {
-          throw std::runtime_error(fmt::format("{}:{}: {} fields, the header has {}", path, ln,
-                                               fields.size(), t.header.size()));
+          throw ReadError(
+              path, ln,
+              fmt::format("{} fields, the header has {}", fields.size(), t.header.size()));
         }
         t.rows.push_back(std::move(fields));
         t.line_of.push_back(ln);
         t.text.push_back(line);
       });
   if (!has_header) {
-    if (!empty_ok) throw std::runtime_error(fmt::format("{}:1: empty file", path));
+    if (!empty_ok) throw ReadError(path, 1, "empty file");
     t.warnings.push_back(path + ": empty (no header): read as no rows");
   }
   return t;
@@ -126,16 +197,17 @@ SeriesTable read_series(const std::string& path, const LagrangianModel& model,
           for (std::size_t h = 0; h < header.size(); ++h)
             if (header[h] == t.columns[c].name) at[c] = static_cast<int>(h);
           if (at[c] < 0) {
-            throw std::runtime_error(fmt::format(
-                "{}:1: column '{}' missing (rubdyn output expected)", path, t.columns[c].name));
+            throw ReadError(
+                path, 1,
+                fmt::format("column '{}' missing (rubdyn output expected)", t.columns[c].name));
           }
         }
       },
       [&](const std::string& line, long ln) {
         split_plain(line, fields);
         if (fields.size() != width) {
-          throw std::runtime_error(
-              fmt::format("{}:{}: {} fields, the header has {}", path, ln, fields.size(), width));
+          throw ReadError(path, ln,
+                          fmt::format("{} fields, the header has {}", fields.size(), width));
         }
         for (std::size_t c = 0; c < t.columns.size(); ++c) {
           const SampleColumn& col = t.columns[c];
@@ -144,21 +216,29 @@ SeriesTable read_series(const std::string& path, const LagrangianModel& model,
           if (col.field == SampleField::Phase) {
             Phase p{};
             if (!parse_phase(f, p)) {
-              throw std::runtime_error(
-                  fmt::format("{}:{}: column {}: '{}' is not a phase (free, slip+, slip-, stick)",
-                              path, ln, col.name, f));
+              throw ReadError(path, ln,
+                              fmt::format("column {}: '{}' is not a phase (free, slip+, slip-, "
+                                          "stick)",
+                                          col.name, printable(f)));
             }
             x = static_cast<double>(p);
           } else if (!field_number(f, x)) {
-            throw std::runtime_error(
-                fmt::format("{}:{}: column {}: '{}' is not a number", path, ln, col.name, f));
+            throw ReadError(path, ln,
+                            fmt::format("column {}: '{}' is not a number", col.name, printable(f)));
           }
-          if (col.field == SampleField::Time && !t.values[c].empty() && x < t.values[c].back())
-            throw std::runtime_error(fmt::format("{}:{}: t = {} goes back in time", path, ln, x));
+          if (col.field == SampleField::Time) {
+            if (!std::isfinite(x)) {
+              throw ReadError(
+                  path, ln,
+                  fmt::format("column {}: '{}' is not a finite time", col.name, printable(f)));
+            }
+            if (!t.values[c].empty() && x < t.values[c].back())
+              throw ReadError(path, ln, fmt::format("t = {} goes back in time", x));
+          }
           t.values[c].push_back(x);
         }
       });
-  if (!has_header) throw std::runtime_error(fmt::format("{}:1: empty file", path));
+  if (!has_header) throw ReadError(path, 1, "empty file");
   return t;
 }
 
@@ -173,8 +253,8 @@ std::vector<EventRecord> read_events(const std::string& path, int contacts,
   for (std::size_t c = 0; c < cols.size(); ++c) {
     at[c] = ev.column(cols[c].name);
     if (at[c] < 0) {
-      throw std::runtime_error(
-          fmt::format("{}:1: column '{}' missing (rubdyn output expected)", path, cols[c].name));
+      throw ReadError(path, 1,
+                      fmt::format("column '{}' missing (rubdyn output expected)", cols[c].name));
     }
   }
   out.reserve(ev.rows.size());
@@ -184,8 +264,13 @@ std::vector<EventRecord> read_events(const std::string& path, int contacts,
       try {
         set_event_field(e, cols[c], ev.rows[k][static_cast<std::size_t>(at[c])]);
       } catch (const std::invalid_argument& err) {
-        throw std::runtime_error(fmt::format("{}:{}: {}", path, ev.line_of[k], err.what()));
+        throw ReadError(path, ev.line_of[k], err.what());
       }
+    }
+    if (!std::isfinite(e.t)) {
+      throw ReadError(path, ev.line_of[k],
+                      fmt::format("column t: '{}' is not a finite time",
+                                  printable(ev.rows[k][static_cast<std::size_t>(at[0])])));
     }
     out.push_back(std::move(e));
   }
@@ -199,8 +284,8 @@ RunFiles read_run_files(const std::string& dir) {
   RunFiles r;
   r.dir = dir;
   const std::string case_path = (fs::path(dir) / "case.resolved.toml").string();
-  if (!fs::is_directory(dir)) throw std::runtime_error(dir + ": not an output folder");
-  if (!fs::exists(case_path)) throw std::runtime_error(case_path + ": missing");
+  if (!fs::is_directory(dir)) throw ReadError(dir, 0, "not an output folder (no such folder)");
+  if (!fs::exists(case_path)) throw ReadError(case_path, 0, "missing");
   r.spec = load_case(case_path);
   r.model = build_model(r.spec);
   r.series = read_series((fs::path(dir) / "timeseries.csv").string(), *r.model, r.warnings);
@@ -208,8 +293,22 @@ RunFiles read_run_files(const std::string& dir) {
   if (fs::exists(ev_path)) r.events = read_events(ev_path, r.model->contact_count(), r.warnings);
   const fs::path sj = fs::path(dir) / "summary.json";
   if (fs::exists(sj)) {
-    std::ifstream in(sj.string());
+    std::ifstream in(sj.string(), std::ios::binary);
+    if (!in || fs::is_directory(sj)) throw ReadError(sj.string(), 0, "cannot read");
     r.summary_json.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    // the writer renames a whole file into place: anything else is not its summary (CRLF line
+    // ends, from an editor, are still JSON)
+    std::size_t ln = 1, from = 0;
+    for (;; ++ln) {
+      const std::size_t nl = r.summary_json.find('\n', from);
+      std::string line = r.summary_json.substr(from, nl == std::string::npos ? nl : nl - from);
+      if (!line.empty() && line.back() == '\r') line.pop_back();
+      require_text(sj.string(), static_cast<long>(ln), line);
+      if (nl == std::string::npos) break;
+      from = nl + 1;
+    }
+    if (r.summary_json.empty())
+      r.warnings.push_back(sj.string() + ": empty: read as absent (the run is incomplete)");
   }
   r.complete = r.summary_json.find("\"complete\": true") != std::string::npos;
   return r;

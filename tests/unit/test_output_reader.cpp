@@ -5,6 +5,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 
 #include "rubdyn/driver/simulate.hpp"
@@ -172,5 +173,137 @@ TEST_CASE("read_run_files: a malformed event row names the file, line and column
   std::ofstream(dir / "events.csv", std::ios::binary | std::ios::trunc) << ev;
   CHECK_THROWS_WITH(read_run_files(dir.string()),
                     Catch::Contains("events.csv:2: column kind: 'bounce' is not an event kind"));
+  std::filesystem::remove_all(dir);
+}
+
+namespace {
+
+/// A complete output folder of the reference case over `t_end` (event solver: impacts, slip).
+std::filesystem::path written_run(const std::string& name, double t_end) {
+  const CaseSpec spec = load_case(std::string(RUBDYN_SOURCE_DIR) + "/cases/reference.toml",
+                                  {"run.t_end=" + std::to_string(t_end)});
+  const auto dir = std::filesystem::temp_directory_path() / name;
+  std::filesystem::remove_all(dir);
+  OutputFolder folder(dir.string(), spec);
+  simulate(spec, folder);
+  return dir;
+}
+
+std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+void put(const std::filesystem::path& p, const std::string& text) {
+  std::ofstream(p, std::ios::binary | std::ios::trunc) << text;
+}
+
+/// The text with its line `line` (1 = first) passed through `edit`.
+std::string edit_line(const std::string& text, int line,
+                      const std::function<void(std::string&)>& edit) {
+  std::size_t from = 0;
+  for (int k = 1; k < line; ++k) from = text.find('\n', from) + 1;
+  const std::size_t to = text.find('\n', from);
+  std::string l = text.substr(from, to - from);
+  edit(l);
+  return text.substr(0, from) + l + text.substr(to);
+}
+
+}  // namespace
+
+TEST_CASE("read_csv: a line that is not text names the file - line and byte", "[io][unit]") {
+  // NUL, a control character, a lone UTF-8 continuation byte, a cut UTF-8 sequence, an overlong
+  // form and a surrogate are not text; the message quotes no byte of the file (ASCII only)
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {std::string("0,1\0", 4), "byte 0x00 at column 4"},
+      {"0,\x01", "byte 0x01 at column 3"},
+      {"0,\x80", "byte 0x80 at column 3"},
+      {"0,\xc3", "byte 0xc3 at column 3"},
+      {"0,\xc0\xaf", "byte 0xc0 at column 3"},
+      {"0,\xed\xa0\x80", "byte 0xed at column 3"}};
+  for (const auto& [row, what] : bad) {
+    const std::string p = write("binary.csv", "t,x\n" + row + "\n1,2\n");
+    INFO(printable(row));
+    try {
+      read_csv(p);
+      FAIL("accepted");
+    } catch (const ReadError& e) {
+      CHECK(std::string(e.what()).find(p + ":2: " + what) == 0);
+      CHECK(e.file() == p);
+      CHECK(e.line() == 2);
+      for (const char ch : std::string(e.what()))
+        CHECK((static_cast<unsigned char>(ch) >= 0x20 && static_cast<unsigned char>(ch) < 0x7f));
+    }
+  }
+  // UTF-8 text (an accented word, a tab) is text; CRLF reads as LF
+  const std::string ok = write("utf8.csv", "t,note\r\n0,\"caf\xc3\xa9\tbar\"\r\n1,x\r\n");
+  const CsvTable t = read_csv(ok);
+  REQUIRE(t.rows.size() == 2);
+  CHECK(t.rows[0][1] == "caf\xc3\xa9\tbar");
+  CHECK(t.rows[1][1] == "x");
+  CHECK(t.header == std::vector<std::string>{"t", "note"});
+  CHECK(printable("a\x01\xff" + std::string(50, 'b'), 10) == "a\\x01\\xffbbbbbbb...");
+}
+
+TEST_CASE("read_run_files: CRLF line ends read as the same numbers", "[io][unit]") {
+  const auto dir = written_run("rubdyn_read_crlf", 0.01);
+  const RunFiles lf = read_run_files(dir.string());
+  for (const char* name : {"timeseries.csv", "events.csv"}) {
+    std::string text = slurp(dir / name), crlf;
+    for (const char ch : text) crlf += ch == '\n' ? std::string("\r\n") : std::string(1, ch);
+    REQUIRE(crlf.size() > text.size());
+    put(dir / name, crlf);
+  }
+  const RunFiles cr = read_run_files(dir.string());
+  CHECK(cr.warnings.empty());
+  REQUIRE(cr.series.rows() == lf.series.rows());
+  CHECK(cr.series.values == lf.series.values);  // the same text: the same doubles
+  REQUIRE(cr.events.size() == lf.events.size());
+  REQUIRE_FALSE(cr.events.empty());
+  CHECK(cr.events.back().note == lf.events.back().note);  // no '\r' left in the last field
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("read_run_files: a time that is not finite is refused with file and line", "[io][unit]") {
+  const auto dir = written_run("rubdyn_read_nan_time", 0.01);
+  const std::string ts = slurp(dir / "timeseries.csv"), ev = slurp(dir / "events.csv");
+  for (const char* value : {"nan", "inf", "-inf"}) {
+    INFO(value);
+    // the first field of line 4 (the third sample) is its time
+    put(dir / "timeseries.csv",
+        edit_line(ts, 4, [&](std::string& l) { l = value + l.substr(l.find(',')); }));
+    CHECK_THROWS_AS(read_run_files(dir.string()), ReadError);
+    CHECK_THROWS_WITH(read_run_files(dir.string()),
+                      Catch::Contains("timeseries.csv:4: column t: '" + std::string(value) +
+                                      "' is not a finite time"));
+    put(dir / "timeseries.csv", ts);
+    put(dir / "events.csv",
+        edit_line(ev, 2, [&](std::string& l) { l = value + l.substr(l.find(',')); }));
+    CHECK_THROWS_WITH(read_run_files(dir.string()),
+                      Catch::Contains("events.csv:2: column t: '" + std::string(value) +
+                                      "' is not a finite time"));
+    put(dir / "events.csv", ev);
+  }
+  CHECK_NOTHROW(read_run_files(dir.string()));  // restored: the edits were the only fault
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("read_run_files: summary.json empty or binary - timeseries header only", "[io][unit]") {
+  const auto dir = written_run("rubdyn_read_summary", 0.01);
+  put(dir / "summary.json", "");
+  RunFiles f = read_run_files(dir.string());
+  CHECK_FALSE(f.complete);
+  REQUIRE(f.warnings.size() == 1);
+  CHECK(f.warnings[0].find("summary.json: empty") != std::string::npos);
+  put(dir / "summary.json", "{\"complete\": true,\n\xff\xfe}");
+  CHECK_THROWS_WITH(read_run_files(dir.string()),
+                    Catch::Contains("summary.json:2: byte 0xff at column 1: not text"));
+  std::filesystem::remove(dir / "summary.json");
+  // a run killed before its first sample: no rows, no error (what reads it decides)
+  const std::string ts = slurp(dir / "timeseries.csv");
+  put(dir / "timeseries.csv", ts.substr(0, ts.find('\n') + 1));
+  f = read_run_files(dir.string());
+  CHECK(f.series.rows() == 0);
+  CHECK_FALSE(f.complete);
   std::filesystem::remove_all(dir);
 }

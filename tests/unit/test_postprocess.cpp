@@ -5,6 +5,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <optional>
 #include <sstream>
 
 #include "rubdyn/analysis/postprocess.hpp"
@@ -329,4 +331,52 @@ TEST_CASE("sweep --certify: a verdict that changes with the step is not certifie
   CHECK(l0.find(",yes,completed,no,") != std::string::npos);
   CHECK(l1.find(",no,completed,yes,") != std::string::npos);
   fs::remove_all(out);
+}
+
+TEST_CASE("postprocess: NaN sample times and NaN or reversed windows are refused", "[post]") {
+  // The samples reach verdicts from memory too (Python's analyze): a NaN time or window bound
+  // dropped out of std::max / std::min and of every comparison, and was analysed as the whole run.
+  const auto dir = circular_run("nan", 1e-4, -300.0, 1e-4, 200, "slip-", 5.0);
+  const RunRecord good = read_run(dir.string());
+  auto d = derive(good);
+  CHECK_NOTHROW(verdicts(good, d));  // the unperturbed run is analysed
+  const double nan = std::nan("");
+  for (const std::size_t i : {std::size_t{0}, std::size_t{57}, std::size_t{199}}) {
+    RunRecord r = good;
+    r.samples[i].t = nan;
+    auto dr = derive(r);
+    INFO(i);
+    CHECK_THROWS_AS(verdicts(r, dr), std::invalid_argument);
+    CHECK_THROWS_WITH(verdicts(r, dr),
+                      Catch::Contains("sample " + std::to_string(i) + ": t = nan"));
+    CHECK_THROWS_WITH(full_spectrum(r), Catch::Contains("is not finite"));
+  }
+  RunRecord back = good;
+  back.samples[100].t = back.samples[98].t;  // goes back by one sample
+  auto db = derive(back);
+  CHECK_THROWS_WITH(verdicts(back, db), Catch::Contains("sample 100: t = "));
+  CHECK_THROWS_WITH(verdicts(back, db), Catch::Contains("times must not decrease"));
+  const double inf = std::numeric_limits<double>::infinity();
+  using W = std::pair<std::optional<double>, std::optional<double>>;
+  for (const W& w : {W{nan, std::nullopt}, W{std::nullopt, nan}, W{0.001, nan}, W{-inf, 0.01}}) {
+    AnalysisOptions o;
+    o.t0 = w.first;
+    o.t1 = w.second;
+    INFO(o.t0.value_or(-1) << " " << o.t1.value_or(-1));
+    CHECK_FALSE(analysis_option_problems(o).empty());
+    CHECK_THROWS_WITH(verdicts(good, d, o), Catch::Contains("times must be finite"));
+  }
+  AnalysisOptions reversed;
+  reversed.t0 = 0.015;
+  reversed.t1 = 0.005;
+  const auto problems = analysis_option_problems(reversed);
+  REQUIRE(problems.size() == 1);
+  CHECK(problems[0] == "--t-window t1 = 0.005: must be > t0");
+  CHECK_THROWS_WITH(verdicts(good, d, reversed), Catch::Contains("does not overlap"));
+  AnalysisOptions inside;  // a valid window is accepted: the refusals above are the bounds'
+  inside.t0 = 0.005;
+  inside.t1 = 0.015;
+  CHECK(analysis_option_problems(inside).empty());
+  CHECK(verdicts(good, d, inside).t0 == 0.005);
+  fs::remove_all(dir);
 }

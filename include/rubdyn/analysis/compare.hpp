@@ -10,6 +10,7 @@
 // Events of the same kind (impact, liftoff, stick, slip, ...) are matched in time order to the
 // nearest unmatched event of the other solution within `event_tol`; the rest are unmatched.
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -31,8 +32,10 @@ struct TimedEvent {
   std::string kind;
 };
 
-/// Reads a solution: a folder (timeseries.csv and, if present, events.csv) or a CSV file.
-/// Throws std::runtime_error naming the file, line and problem on bad input.
+/// Reads a solution: a folder (timeseries.csv and, if present, events.csv) or a CSV file,
+/// through the output folders' CSV reader (io/output_reader.hpp: a cut last row dropped with a
+/// warning, CRLF read as LF). Throws ReadError naming the file, line and problem on bad input
+/// (not text, a short row, a t that is not finite or decreases, fewer than two samples).
 Series read_series(const std::string& path);
 std::vector<TimedEvent> read_events(const std::string& path);  ///< empty for a plain CSV
 
@@ -58,6 +61,12 @@ struct Comparison {
 };
 
 /// Compares b against a over [t0, t1] (default: the overlap of the two time ranges).
+/// Throws std::invalid_argument naming the solution (its `source`) and the rule for inputs that
+/// are not two solutions: fewer than two samples, a column whose length differs from t's, a time
+/// (sample or event) that is not finite, times that decrease; for a window that is not two finite
+/// times t0 < t1, an event_tol that is not finite and > 0; and when the solutions do not overlap
+/// in the window or share none of the standard columns. NaN values in the columns are allowed
+/// (counted as non_finite differences).
 Comparison compare_solutions(const Series& a, const Series& b, const std::vector<TimedEvent>& ea,
                              const std::vector<TimedEvent>& eb,
                              std::optional<std::pair<double, double>> window = std::nullopt,

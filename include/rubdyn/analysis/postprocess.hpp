@@ -83,8 +83,8 @@ struct AnalysisOptions {
 };
 
 /// Every rule `o` breaks, one message each naming the option (empty: valid): min_turns > 0,
-/// window > 0, overlap in [0, 1), pad >= 1, f_max > 0, all finite. Checked by analyze and by a
-/// sweep before its first point.
+/// window > 0, overlap in [0, 1), pad >= 1, f_max > 0, t0 < t1 when both are given, all
+/// finite. Checked by analyze and by a sweep before its first point.
 std::vector<std::string> analysis_option_problems(const AnalysisOptions& o);
 
 struct RunVerdicts {
@@ -137,7 +137,9 @@ struct Spectrogram {
 inline constexpr double kUndersampledFraction = 0.5;
 
 std::vector<DerivedSample> derive(const RunRecord& r);
-/// Also marks d[i].sustained.
+/// Also marks d[i].sustained. verdicts, full_spectrum and spectrogram throw
+/// std::invalid_argument for a run without samples, a sample time that is not finite, times
+/// that decrease, or a window that does not overlap the run.
 RunVerdicts verdicts(const RunRecord& r, std::vector<DerivedSample>& d,
                      const AnalysisOptions& o = {});
 /// Throws std::invalid_argument on fewer than 8 uniform samples in the window.

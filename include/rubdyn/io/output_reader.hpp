@@ -3,8 +3,13 @@
 // them). `rubdyn analyze`, `rubdyn run --from`, `rubdyn compare`, sweeps (resume, shard merge)
 // and the library all read through it, with the same tolerance for what a killed run leaves:
 // a last row without its line end is dropped with a warning, an empty events.csv reads as no
-// events, a missing or incomplete summary.json marks the run incomplete.
+// events, a missing or incomplete summary.json marks the run incomplete. CRLF line ends are read
+// as LF. Anything else malformed is a ReadError naming the file and the line: a binary or
+// non-UTF-8 file (a NUL, a control character or an invalid UTF-8 sequence on any line), a row
+// whose field count differs from the header's, a field that is not a number, a time that is not
+// finite or goes back. Messages quote file content through `printable`, so they are ASCII.
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -14,6 +19,24 @@
 #include "rubdyn/io/columns.hpp"
 
 namespace rubdyn {
+
+/// A file that is not what its reader expects (malformed, binary, missing). what() is
+/// "file:line: problem" (line 0: the file as a whole, then "file: problem"); the CLI exits 2,
+/// Python raises rubdyn.ReadError (a ValueError) with .file and .line.
+class ReadError : public std::runtime_error {
+ public:
+  ReadError(std::string file, long line, const std::string& problem);
+  const std::string& file() const { return file_; }
+  long line() const { return line_; }
+
+ private:
+  std::string file_;
+  long line_;
+};
+
+/// `text` (a field or line of a file) for a message: printable ASCII as is, every other byte as
+/// \xNN, cut to `max` bytes of input with "..." after.
+std::string printable(std::string_view text, std::size_t max = 40);
 
 /// One CSV file: the header and the rows as text, each with its line number.
 struct CsvTable {
@@ -27,9 +50,9 @@ struct CsvTable {
   /// Index of a column, or -1.
   int column(std::string_view name) const;
 };
-/// Reads `path`. Throws std::runtime_error naming the file and line for a missing file, a row
-/// whose field count differs from the header's, or (unless empty_ok) a file without a header.
-/// A last row without its line end is dropped with a warning.
+/// Reads `path`. Throws ReadError naming the file and line for a missing file, a line that is
+/// not text, a row whose field count differs from the header's, or (unless empty_ok) a file
+/// without a header. A last row without its line end is dropped with a warning.
 CsvTable read_csv(const std::string& path, bool empty_ok = false);
 
 /// A whole field as a number (strtod; false for an empty field or trailing text).
@@ -49,9 +72,11 @@ struct RunFiles {
   bool complete = true;               ///< summary.json "complete" (false: ended early or absent)
   std::vector<std::string> warnings;  ///< what the reader tolerated
 };
-/// Throws std::runtime_error naming the file, line, column and problem on a missing or bad
-/// file (case.resolved.toml and timeseries.csv are required; events.csv and summary.json may be
-/// missing after a killed run).
+/// Throws ReadError naming the file, line, column and problem on a missing or bad file
+/// (case.resolved.toml and timeseries.csv are required; events.csv and summary.json may be
+/// missing after a killed run; an empty summary.json reads as absent, with a warning), and
+/// CaseError for a case.resolved.toml that is not a valid case. Every time (timeseries.csv's t,
+/// events.csv's t) is finite and t does not decrease; summary.json is UTF-8 text.
 RunFiles read_run_files(const std::string& dir);
 
 /// A run read back from its output folder, as samples (what the analyses read).
@@ -63,7 +88,7 @@ struct RunRecord {
   bool complete = true;               ///< summary.json "complete" (false: ended early or absent)
   std::vector<std::string> warnings;  ///< what the reader tolerated (the CLI prints them)
 };
-/// Throws std::runtime_error naming the file, line and problem on a missing or bad file.
+/// Throws as read_run_files.
 RunRecord read_run(const std::string& dir);
 
 /// summary.json of `dir` says "complete": true.
