@@ -1,36 +1,15 @@
 // The K-contact solver (rubdyn/contact/contact_set.hpp) allocates nothing in solve(): its
 // workspaces are sized when it is built. Checked by counting every heap allocation of the
 // process (malloc, calloc, realloc; operator new and Eigen go through them) around solves of
-// every kind: enumeration for K = 1..4 with each outcome, Gauss-Seidel for K = 8. A program of
-// its own (tests/CMakeLists.txt), as tests/alloc/test_no_allocation.cpp.
+// every kind: enumeration for K = 1..4 with each outcome, Gauss-Seidel for K = 8. Part of the
+// allocation-test program (tests/CMakeLists.txt; the counter: alloc_counter.hpp).
 
-#include <atomic>
 #include <catch2/catch.hpp>
 #include <cstddef>
 #include <vector>
 
+#include "alloc/alloc_counter.hpp"
 #include "rubdyn/contact/contact_set.hpp"
-
-extern "C" void* __libc_malloc(std::size_t);
-extern "C" void* __libc_calloc(std::size_t, std::size_t);
-extern "C" void* __libc_realloc(void*, std::size_t);
-
-namespace {
-std::atomic<long> g_allocations{0};
-}  // namespace
-
-extern "C" void* malloc(std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  return __libc_malloc(n);
-}
-extern "C" void* calloc(std::size_t n, std::size_t m) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  return __libc_calloc(n, m);
-}
-extern "C" void* realloc(void* p, std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  return __libc_realloc(p, n);
-}
 
 using namespace rubdyn;
 
@@ -60,7 +39,7 @@ TEST_CASE("No allocation in the K-contact solver: enumeration and Gauss-Seidel",
   up << -1, 0, -1, 0;
   std::vector<SetContact> cp = {{0.5, 0, {}}, {1.0, 1, {}}};
   long outcomes = 0;
-  const long before = g_allocations.load();
+  const long before = rubdyn::testing::allocations();
   for (int K = 1; K <= K_max; ++K) {
     const SetBand band = contact_set_band(Ws[K - 1], us[K - 1]);
     outcomes += static_cast<int>(solver.solve(Ws[K - 1], us[K - 1], cs[K - 1], band));
@@ -75,11 +54,11 @@ TEST_CASE("No allocation in the K-contact solver: enumeration and Gauss-Seidel",
   outcomes += static_cast<int>(
       solver.solve(Ws[3].topLeftCorner(4, 4), us[3].head(4), std::span(cs[3]).first(2),
                    contact_set_band(Ws[3].topLeftCorner(4, 4), us[3].head(4))));
-  const long n = g_allocations.load() - before;
+  const long n = rubdyn::testing::allocations() - before;
   INFO("allocations " << n << " (outcomes " << outcomes << ")");
   CHECK(n == 0);
   // the counter counts: building a solver allocates its workspaces
-  const long before_build = g_allocations.load();
+  const long before_build = rubdyn::testing::allocations();
   { ContactSetSolver other(2); }
-  CHECK(g_allocations.load() > before_build);
+  CHECK(rubdyn::testing::allocations() > before_build);
 }

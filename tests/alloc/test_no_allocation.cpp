@@ -5,10 +5,10 @@
 // event in the extra time, must allocate the same number of times. A separate program (not
 // under the sanitizers, which replace malloc themselves).
 
-#include <atomic>
 #include <catch2/catch.hpp>
 #include <cstddef>
 
+#include "alloc/alloc_counter.hpp"
 #include "rubdyn/hybrid/event_driven.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/model_registry.hpp"
@@ -16,27 +16,6 @@
 #include "rubdyn/stepping/fixed_step.hpp"
 #include "support/jeffcott_cases.hpp"
 #include "support/problems.hpp"
-
-extern "C" void* __libc_malloc(std::size_t);
-extern "C" void* __libc_calloc(std::size_t, std::size_t);
-extern "C" void* __libc_realloc(void*, std::size_t);
-
-namespace {
-std::atomic<long> g_allocations{0};
-}  // namespace
-
-extern "C" void* malloc(std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  return __libc_malloc(n);
-}
-extern "C" void* calloc(std::size_t n, std::size_t m) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  return __libc_calloc(n, m);
-}
-extern "C" void* realloc(void* p, std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  return __libc_realloc(p, n);
-}
 
 using namespace rubdyn;
 
@@ -53,12 +32,12 @@ class NullSink final : public OutputSink {
 /// Heap allocations of one whole run (set-up included), and the run's event count.
 template <class Run>
 std::pair<long, long> count(Run&& run) {
-  const long before = g_allocations.load();
+  const long before = rubdyn::testing::allocations();
   const RunSummary s = run();
   REQUIRE(s.complete());
   long events = 0;
   for (long e : s.events) events += e;
-  return {g_allocations.load() - before, events};
+  return {rubdyn::testing::allocations() - before, events};
 }
 
 /// The same scene run to t1 and to t2 > t1 allocates the same: nothing per step, sample or root
