@@ -322,3 +322,41 @@ TEST_CASE("Sweep: the default per-point budget", "[bounded]") {
   CHECK(default_wall_budget(100.0) == 10000.0);
   CHECK(default_wall_budget(1.0, 1e9) == 20000.0);
 }
+
+TEST_CASE("CLI: the issue's reproductions end in seconds with their exit codes", "[bounded][cli]") {
+  const fs::path dir = fresh_dir("bounded");
+  struct Repro {
+    std::string sets;
+    int code;
+    std::string says;  ///< in the standard error
+  };
+  const Repro repros[] = {
+      {"--set rotor.Jd=5e-324", 2, "rotor.Jd"},
+      {"--set initial.omega0=1e308 --solver mj --h 1e-6", 2, "initial.omega0"},
+      {"--set rotor.radius=1e308", 2, "rotor.radius"},
+      {"--set rotor.L=1e30", 3, "step_collapse"},
+      {"--set loads.torque=1e12 --set initial.vy_r=-1", 3, "implausible"},
+      {"--set bearing.c=1e308 --solver carp-onevc --h 1e-6", 3, "implausible"},
+  };
+  for (const auto& r : repros) {
+    INFO(r.sets);
+    fs::remove_all(dir);
+    const auto t0 = std::chrono::steady_clock::now();
+    const CliOutcome o =
+        cli("run " + sh(kRef) + " --t-end 0.001 --quiet " + r.sets + " --out " + sh(dir.string()));
+    // 0.01 s each, measured; each ran for a minute or more before (see above)
+    CHECK(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < 2.0);
+    INFO(o.err);
+    CHECK(o.code == r.code);
+    CHECK(has(o.err, r.says));
+    if (r.code == 2) CHECK_FALSE(fs::exists(dir));  // nothing written
+    if (r.code == 3) CHECK(has(slurp(dir / "summary.json"), "\"complete\": false"));
+  }
+  // a huge output interval: the initial and the final state are written, compare accepts it
+  fs::remove_all(dir);
+  REQUIRE(cli("run " + sh(kRef) + " --t-end 0.001 --quiet --solver mj --h 1e-6 --set " +
+              "output.dt=1e308 --out " + sh(dir.string()))
+              .code == 0);
+  CHECK(cli("compare " + sh(dir.string()) + " " + sh(dir.string())).code == 0);
+  fs::remove_all(dir);
+}
