@@ -194,20 +194,34 @@ TEST_CASE("Bounded: run.max_wall and the stop flag act between steps, not only a
 
 TEST_CASE("Bounded: a cut CVODE call changes nothing (max_steps_per_call still ends a run)",
           "[bounded]") {
-  // the calls are cut every kCheckSteps steps and continued: one output interval over 0.05 s
-  // (hundreds of steps per call) and the option's own limit still apply
+  // CVODE's calls are cut every kCheckSteps steps and continued. The output grid does not
+  // change the steps (CV_NORMAL never shortens a step to hit tout), so one output interval over
+  // 0.3 s (about 2000 steps, cut twice) must end in the very state of a run with the usual
+  // 1e-4 s grid (never cut), bit for bit, with the same events
   const Scene sc;
   const RotorStatorModel model(sc.p);
-  EventDrivenOptions o;
-  o.output_dt = 0.05;
-  MemorySink a;
-  const RunSummary sa = run_event_driven(model, sc.s0, 0.05, o, a);
+  auto run_with = [&](double dt, MemorySink& sink) {
+    EventDrivenOptions o;
+    o.output_dt = dt;
+    return run_event_driven(model, sc.s0, 0.3, o, sink);
+  };
+  MemorySink a, b;
+  const RunSummary sa = run_with(0.3, a), sb = run_with(1e-4, b);
   REQUIRE(sa.complete());
+  REQUIRE(sb.complete());
+  CHECK(sa.steps > 2 * kCheckSteps);
+  CHECK(sa.steps == sb.steps);
+  CHECK(a.samples.back().q == b.samples.back().q);
+  CHECK(a.samples.back().v == b.samples.back().v);
+  REQUIRE(a.events.size() == b.events.size());
+  for (size_t i = 0; i < a.events.size(); ++i) CHECK(a.events[i].t == b.events[i].t);
+  // the option's own limit per advance still ends a run
+  EventDrivenOptions o;
   o.max_steps_per_call = 10;
-  MemorySink b;
-  const RunSummary sb = run_event_driven(model, sc.s0, 0.05, o, b);
-  CHECK(sb.termination == Termination::SolverFailure);
-  CHECK(sb.message.find("CV_TOO_MUCH_WORK") != std::string::npos);
+  MemorySink c;
+  const RunSummary sc10 = run_event_driven(model, sc.s0, 0.05, o, c);
+  CHECK(sc10.termination == Termination::SolverFailure);
+  CHECK(sc10.message.find("CV_TOO_MUCH_WORK") != std::string::npos);
 }
 
 TEST_CASE("Plausibility: a balance that does not close is no complete run", "[bounded]") {
