@@ -484,7 +484,7 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
         env_->check_speed(t, kin_.v_N, kin_.v_t);
       }
       if (!sum.complete() || env_->watch(t, steps)) {
-        // the state at a step end: written, so that the output ends where the run did
+        // the state reached (a step end or an event) is written: the output ends where the run did
         if (!(t <= env_->last_output_time())) emit_sample(t, q, v);
         break;
       }
