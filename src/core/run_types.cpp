@@ -40,6 +40,8 @@ std::string_view to_string(Termination t) {
     case Termination::Interrupted: return "interrupted";
     case Termination::TimeBudget: return "time_budget";
     case Termination::OutputFailure: return "output_failure";
+    case Termination::StepCollapse: return "step_collapse";
+    case Termination::Implausible: return "implausible";
   }
   return "?";
 }

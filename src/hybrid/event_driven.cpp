@@ -71,7 +71,11 @@ class Integrator {
     s.g0 = tol_.g0;
     s.adams = opt_.adams;
     s.fixed_point = opt_.fixed_point;
-    s.max_steps = opt_.max_steps_per_call;
+    // A CVODE call takes at most kCheckSteps steps (run_envelope.hpp): the loop then sees the
+    // stop flag, the clock and the step rate between steps, not only at samples and events. A
+    // call cut there (CV_TOO_MUCH_WORK) is continued by the next one with the same steps, roots
+    // and output: CVODE returns at a step end whose roots it has checked (run()).
+    s.max_steps = std::min(opt_.max_steps_per_call, kCheckSteps);
     free_ = std::make_unique<FreeFlight>(m_, wit_, s);
     s.adams = opt_.contact_adams;
     if (chart_ == nullptr) {
@@ -437,6 +441,15 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
                                   : "bdf+projection",
                            opt_.fixed_point ? "fixed-point" : "newton", opt_.output_dt));
   RunSummary& sum = env_->summary();
+  // The event solver resolves the contact to round-off: a penetration beyond a millionth of the
+  // gap (the integrator's position resolution graze_tol added, for a loose atol) is no solution
+  Plausibility plaus;
+  plaus.max_penetration = 1e-6 * m_.gap_scale(0) + tol_.graze_tol;
+  env_->set_plausibility(plaus);
+  auto steps_so_far = [&sum] {
+    return std::accumulate(sum.phase_steps.begin(), sum.phase_steps.end(), 0L);
+  };
+  long call_steps = 0;  // steps of the current advance, over the calls it was cut into
   double t = init.t;
   Vec q = init.q, v = init.v;
   bool ok = true;
@@ -463,6 +476,18 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
       v = v_restart_;
     }
     while (ok && t < t_end_) {
+      // between steps: a failure seen by the envelope (a non-finite sample), the stop flag, and
+      // every kCheckSteps steps the wall-time budget and the step-rate guard
+      const long steps = steps_so_far();
+      if (env_->check_due(steps)) {
+        m_.compute_contact(0, t, q, v, kin_);
+        env_->check_speed(t, kin_.v_N, kin_.v_t);
+      }
+      if (!sum.complete() || env_->watch(t, steps)) {
+        // the state reached (a step end or an event) is written: the output ends where the run did
+        if (!(t <= env_->last_output_time())) emit_sample(t, q, v);
+        break;
+      }
       // advance (per-phase cost: steps and wall time of the integration itself)
       const double tout = std::min(env_->next_output(), t_end_);
       const bool arming = gap_rate_deferred_ || gap_banded_;
@@ -472,8 +497,20 @@ RunSummary Integrator::run(const MechanicalState& init, double t_end) {
       const Status st = cur_->advance(tout, t, q, v, arming);
       sum.phase_wall[ph] +=
           std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_adv).count();
-      sum.phase_steps[ph] += cur_->session().steps_since_restart() - steps0;
-      // classify
+      const long taken = cur_->session().steps_since_restart() - steps0;
+      sum.phase_steps[ph] += taken;
+      // classify. A call cut at kCheckSteps steps (open_sessions) goes on at the next call
+      // unless the advance has taken max_steps_per_call steps in all (then it is the
+      // solver_failure that option promises).
+      if (st == Status::Failure && cur_->session().last_error().rfind("CV_TOO_MUCH_WORK", 0) == 0 &&
+          (call_steps += taken) < opt_.max_steps_per_call) {
+        if (!all_finite(q) || !all_finite(v)) {
+          fail(Termination::NonFinite, fmt::format("non-finite state at t = {:.17g}", t));
+          break;
+        }
+        continue;
+      }
+      call_steps = 0;
       if (st == Status::Failure && root_without_restart && recoveries < 100) {
         ++recoveries;
         ++sum.suppressed_witnesses;

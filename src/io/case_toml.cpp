@@ -664,6 +664,7 @@ class Loader {
     // position tolerance.
     if (model_valid) {
       const auto model = build_model(c);
+      derived_finite_rules(c, *model);
       const auto pen = model->initial_penetration(initial_state(c).q,
                                                   64.0 * std::numeric_limits<double>::epsilon());
       if (pen) {
@@ -684,6 +685,64 @@ class Loader {
                           pen->d_N));
       }
     }
+  }
+
+  /// Quantities derived from valid values must be finite too: the initial state's mechanical
+  /// energy and its contact kinematics (gap, gap rate, slip speed R_r omega + ...). An overflow
+  /// there (omega0 = 1e308, radius = 1e308) would only give non-finite numbers in the output.
+  /// The key named is the given number of largest magnitude (the one that overflowed, in every
+  /// case seen: a single absurd value among ordinary ones).
+  void derived_finite_rules(const CaseSpec& c, const LagrangianModel& model) {
+    const MechanicalState s0 = initial_state(c);
+    std::string what;
+    double value = 0.0;
+    const double E = model.mechanical_energy(s0.t, s0.q, s0.v);
+    if (!std::isfinite(E)) {
+      what = "the initial mechanical energy";
+      value = E;
+    }
+    for (int k = 0; k < model.contact_count() && what.empty(); ++k) {
+      const ContactKinematics ck = model.contact(k, s0.t, s0.q, s0.v);
+      for (const auto& [name, x] : {std::pair<const char*, double>{"gap d_N", ck.d_N},
+                                    {"gap rate v_N", ck.v_N},
+                                    {"slip speed v_t", ck.v_t}}) {
+        if (std::isfinite(x)) continue;
+        what = fmt::format("the initial {}", name);
+        value = x;
+        break;
+      }
+    }
+    // the rim speed R_r |omega0| against the speed no solid is rigid at (run_envelope.hpp)
+    const double R = c.model == "jeffcott" ? c.jeffcott.rotor.radius : c.params.rotor.radius;
+    const double omega0 =
+        model.spin_coordinate() >= 0 ? std::abs(model.spin(s0.t, s0.q, s0.v)) : 0.0;
+    const double rim = R * omega0;
+    if (what.empty() && std::isfinite(E) && !(rim <= kMaxContactSpeed)) {
+      const bool by_radius = std::abs(R) > omega0 || !given("initial.omega0");
+      const std::string key = by_radius ? "rotor.radius" : "initial.omega0";
+      const toml::node* n = at(key);
+      issue(key, n, n ? node_text(*n) : "(default)",
+            fmt::format("the initial rim speed rotor.radius x |initial.omega0| = {:.3g} m/s must "
+                        "be <= {:.3g} m/s (no solid is rigid at that speed: elastic waves travel "
+                        "at 6 km/s in steel, 13 km/s in beryllium)",
+                        rim, kMaxContactSpeed));
+      return;
+    }
+    if (what.empty()) return;
+    std::string key;
+    double largest = -1.0;
+    for (const CaseEntry& e : case_values(c)) {
+      const double* x = std::get_if<double>(&e.value);
+      if (!x || !given(e.full()) || !(std::abs(*x) > largest)) continue;
+      largest = std::abs(*x);
+      key = e.full();
+    }
+    if (key.empty()) key = "initial.omega0";
+    const toml::node* n = at(key);
+    issue(key, n, n ? node_text(*n) : "(default)",
+          fmt::format("{} is {} (an overflow): every quantity derived from the case must be "
+                      "finite; this is the largest value given",
+                      what, value));
   }
 
   void rigid_rotor_rules(const CaseSpec& c) {
@@ -719,6 +778,17 @@ class Loader {
            fmt::format("must be > loads.unbalance^2 / rotor.mass = {:.6g} kg m^2 (the polar "
                        "inertia includes the unbalance's m eps^2)",
                        ub * ub / r.mass));
+    // A rigid body's principal moments about its mass centre obey the triangle inequality
+    // C <= A + B: for an axisymmetric rotor the polar moment about G is at most twice the
+    // diametral one (equality: a thin disc). Jp above 2 Jd is no rigid body, and makes the
+    // tilt dynamics degenerate (Jd = 5e-324 ran for minutes on 1 ms).
+    if (r.mass > 0 && r.Jp > 0 && r.Jd > 0) {
+      const double JpG = r.Jp - (ub > 0 ? ub * ub / r.mass : 0.0);
+      rule(JpG <= 2.0 * r.Jd, "rotor.Jd", r.Jd,
+           fmt::format("must be >= Jp_G / 2 = {:.6g} kg m^2 (a rigid body: polar moment about G "
+                       "Jp - loads.unbalance^2 / rotor.mass = {:.6g} <= 2 Jd)",
+                       0.5 * JpG, JpG));
+    }
   }
 
   void jeffcott_rules(const CaseSpec& c) {

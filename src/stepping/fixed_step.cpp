@@ -78,6 +78,8 @@ class RunLoop {
  private:
   /// Records a completed state: monitor, the event between steps, output.
   void record(const StepReport& r, double t);
+  /// Writes a completed state as a sample (false: the envelope refused it, the run ends).
+  bool emit(const StepReport& r, double t);
 
   const LagrangianModel& m_;
   const FixedStepOptions& o_;
@@ -85,6 +87,8 @@ class RunLoop {
   ContactKinematics kin_;
   Sample sample_;
   Phase prev_phase_ = Phase::Free;
+  long written_ = -1;      // the index of the last state written (-1: none)
+  bool recorded_ = false;  // a state has been recorded (the initial one included)
 };
 
 void RunLoop::record(const StepReport& r, double t) {
@@ -93,6 +97,7 @@ void RunLoop::record(const StepReport& r, double t) {
   const bool in_contact = r.phase != Phase::Free;
   const double omega = m_.spin(t, r.q, r.v);
   env_.monitor().observe(t, omega, c.d_N, c.v_N, r.F_N, r.F_T, in_contact);
+  env_.check_speed(t, c.v_N, c.v_t);  // (the run loop stops once the summary is incomplete)
   env_.summary().phase_time[static_cast<int>(r.phase)] += r.index > 0 ? o_.h : 0.0;
   if (r.index > 0 && r.phase != prev_phase_) {
     EventRecord e;
@@ -122,6 +127,7 @@ void RunLoop::record(const StepReport& r, double t) {
     env_.event(e);
   }
   prev_phase_ = r.phase;
+  recorded_ = true;
   // output: every N-th step, or the first step end at or after each point of the output grid
   bool out = false;
   if (o_.output_every > 0) {
@@ -130,25 +136,29 @@ void RunLoop::record(const StepReport& r, double t) {
     out = true;
     while (env_.next_output() <= t + 1e-9 * o_.h) env_.advance_output();
   }
-  if (out) {
-    Sample& s = sample_;
-    s.t = t;
-    s.q = r.q;
-    s.v = r.v;
-    ContactSample& cs = s.contacts[0];
-    cs.d_N = c.d_N;
-    cs.v_N = c.v_N;
-    cs.v_t = c.v_t;
-    cs.F_N = r.F_N;
-    cs.F_T = r.F_T;
-    cs.phase = r.phase;
-    if (s.observables.size() > 0) {
-      const ContactForce F{r.F_N, r.F_T};
-      m_.compute_observables(t, r.q, r.v, r.a, &F, s.observables);
-    }
-    env_.output(s);
-    env_.progress(t, omega, r.phase);
+  if (out && emit(r, t)) env_.progress(t, omega, r.phase);
+}
+
+bool RunLoop::emit(const StepReport& r, double t) {
+  m_.compute_contact(0, t, r.q, r.v, kin_);
+  const ContactKinematics& c = kin_;
+  Sample& s = sample_;
+  s.t = t;
+  s.q = r.q;
+  s.v = r.v;
+  ContactSample& cs = s.contacts[0];
+  cs.d_N = c.d_N;
+  cs.v_N = c.v_N;
+  cs.v_t = c.v_t;
+  cs.F_N = r.F_N;
+  cs.F_T = r.F_T;
+  cs.phase = r.phase;
+  if (s.observables.size() > 0) {
+    const ContactForce F{r.F_N, r.F_T};
+    m_.compute_observables(t, r.q, r.v, r.a, &F, s.observables);
   }
+  written_ = r.index;
+  return env_.output(s);
 }
 
 RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_end) {
@@ -172,7 +182,10 @@ RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_
     const ContactForce F{r.F_N, r.F_T};
     return m_.applied_power(t, r.q, r.v, r.a, &F);
   };
-  if (rheonomic) {
+  // the initial state's acceleration: the contact-free M^-1 f (a rheonomic drive's power at the
+  // start, and the observables of the initial sample that Moreau-Jean's first step does not
+  // report)
+  if (rheonomic || !m_.observables().empty()) {
     Mat f(n, 1);
     m_.smooth_forces(init.t, init.q, init.v, f.col(0));
     m_.solve_mass(init.q, f);
@@ -192,6 +205,9 @@ RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_
     // the clock every 1024 steps: about 20 ns a read against about 0.3 us a step
     if (i % 1024 == 1023 && env_.budget_spent(t)) break;
     const StepOutcome outcome = stepper.step(t, r, message);
+    // Moreau-Jean's step i completes t_{i+1}: the initial state is written before it (the row
+    // at t_start; Carpenter's step 0 reports t_0 itself)
+    if (!recorded_ && (outcome != StepOutcome::Ok || r.index > 0)) record(reports[1], init.t);
     if (outcome != StepOutcome::Ok) {
       env_.fail(outcome == StepOutcome::Painleve    ? Termination::Painleve
                 : outcome == StepOutcome::NonFinite ? Termination::NonFinite
@@ -218,7 +234,12 @@ RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_
     last = &r;
     sum.t_reached = tr;
     record(r, tr);
+    if (!sum.complete()) break;  // a sample the envelope refused (not finite)
   }
+  if (!recorded_) record(reports[1], init.t);  // stopped before the first step
+  // the final state, when the output grid or output_every left it out (t_end off the grid, a
+  // huge output.dt or output.every): the output ends where the run did
+  if (written_ != last->index) emit(*last, sum.t_reached);
   if (unconverged > 0 && sum.message.empty())
     sum.message = fmt::format("carp-qn: {} steps reached itmax = {}", unconverged, o_.itmax);
   if (nonunique > 0 && sum.message.empty())

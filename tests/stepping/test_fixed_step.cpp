@@ -322,3 +322,57 @@ TEST_CASE("Fixed-step runs report progress at every output sample", "[stepping]"
     CHECK(total >= 1);
   }
 }
+
+TEST_CASE("Every fixed-step scheme writes t_start and the final state, and nothing else changes",
+          "[stepping][output]") {
+  // Before: mj and mj-proj (whose step i completes t_{i+1}) never wrote the initial state, and
+  // no scheme wrote the final state when t_end was off the output grid, or with a huge
+  // output.dt or output.every: analyze and compare refused such a folder.
+  RotorStatorParams p;
+  const RotorStatorModel model(p);
+  MechanicalState s0(RotorStatorModel::kDofs);
+  s0.v[TH] = 2000.0;
+  s0.t = 0.001;                 // a restart time, not 0
+  const double t_end = 0.0085;  // 7500 steps of 1e-6 s: off the 1e-3 s output grid
+  for (auto scheme : {FixedStepScheme::CarpOneVC, FixedStepScheme::CarpQN,
+                      FixedStepScheme::MoreauJean, FixedStepScheme::MoreauJeanProjected}) {
+    INFO(to_string(scheme));
+    // every step: the reference the sparser outputs are compared with
+    const MemorySink all = run(model, s0, t_end, scheme, 1e-6, 1);
+    REQUIRE(all.samples.size() == 7501);
+    CHECK(all.samples.front().t == s0.t);
+    CHECK(all.samples.front().q == s0.q);  // the initial position itself, bit for bit
+    // Moreau-Jean's initial row is the initial state; Carpenter's row 0 carries its central
+    // velocity (q_1 - q_-1) / 2h, v_0 in exact arithmetic only (as before this change)
+    if (scheme == FixedStepScheme::MoreauJean || scheme == FixedStepScheme::MoreauJeanProjected)
+      CHECK(all.samples.front().v == s0.v);
+    auto sparse = [&](int every, double dt) {
+      MemorySink sink;
+      FixedStepOptions o;
+      o.scheme = scheme;
+      o.h = 1e-6;
+      o.output_every = every;
+      o.output_dt = dt;
+      const RunSummary s = run_fixed_step(model, s0, t_end, o, sink);
+      REQUIRE(s.complete());
+      REQUIRE(sink.samples.size() >= 2);
+      CHECK(sink.samples.front().t == s0.t);
+      CHECK(sink.samples.back().t == s.t_reached);
+      CHECK(std::abs(s.t_reached - t_end) <= 1e-15);  // ends at t_end (to round-off)
+      // every row is the every-step run's row of the same time, bit for bit (the initial row of
+      // mj carries no contact force: the state before the first step)
+      for (const Sample& x : sink.samples) {
+        const Sample& y = at(all, x.t);
+        CHECK(x.t == y.t);
+        CHECK(x.q == y.q);
+        CHECK(x.v == y.v);
+        CHECK(x.contacts[0].F_N == y.contacts[0].F_N);
+      }
+      return sink.samples.size();
+    };
+    CHECK(sparse(0, 1e-3) == 9);              // t_start, 7 grid times, t_end
+    CHECK(sparse(0, 1e308) == 2);             // t_start, t_end
+    CHECK(sparse(2'000'000'000, 1e-4) == 2);  // index 0 only, then t_end
+    CHECK(sparse(1000, 1e-4) == 9);           // indices 0, 1000, ..., 7000, then 7500
+  }
+}

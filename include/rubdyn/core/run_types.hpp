@@ -48,6 +48,13 @@ enum class Termination : int {
   Interrupted,    ///< stopped by the user (SIGINT, SIGTERM) at an output sample
   TimeBudget,     ///< stopped at an output sample once the run's wall-time budget was spent
   OutputFailure,  ///< the output could not be written (disk full, I/O error); ends the run
+  /// The integrator's steps collapsed: at the step size of its last 1000 steps the run would
+  /// need more than kMaxRunSteps steps (a stiff or degenerate parameter: run_envelope.hpp)
+  StepCollapse,
+  /// A plausibility guard broke (run_envelope.hpp, Plausibility): a result no one should trust
+  /// (the event solver's penetration beyond round-off of the gap, an energy residual as large
+  /// as the energy flows)
+  Implausible,
 };
 std::string_view to_string(Termination t);
 
@@ -59,7 +66,8 @@ inline constexpr int kExitInterrupted = 4;  ///< SIGINT / SIGTERM / run.max_wall
 inline constexpr int kExitOutput = 5;       ///< a write failed: the error names the file
 
 /// Exit code of the CLI for a termination: 0 for Completed, 4 for Interrupted and TimeBudget
-/// (stopped on the user's request), 5 for OutputFailure, 3 for the numerical ones.
+/// (stopped on the user's request), 5 for OutputFailure, 3 for the numerical ones (step_collapse
+/// and implausible included).
 inline int exit_code(Termination t) {
   switch (t) {
     case Termination::Completed: return kExitOk;

@@ -88,10 +88,12 @@ struct EventDrivenOptions : RunControls {
   /// linear algebra) instead of Newton with a difference-quotient Jacobian.
   bool fixed_point = true;
   double max_events_per_second = 1e6;
-  /// CVODE's step limit per call (CVodeSetMaxNumSteps applies it per call to CVode, i.e. per
-  /// output interval or event), not per phase; reaching it ends the run (solver_failure).
+  /// The step limit per advance (per output interval or event), not per phase; reaching it
+  /// ends the run (solver_failure). CVODE's own calls are cut at kCheckSteps steps and
+  /// continued (core/run_envelope.hpp), so that the loop sees the stop flag between steps.
   long max_steps_per_call = 10'000'000;
-  // (run controls: progress and stop act at output samples, as does the wall-time budget)
+  // (run controls: progress acts at output samples; the stop flag, the wall-time budget and the
+  // step-rate guard between steps, at least every kCheckSteps steps: core/run_envelope.hpp)
 };
 
 /// Every rule that `opt` breaks (empty: valid): rtol and atol finite and > 0; output_dt finite
