@@ -27,6 +27,7 @@
 #include <utility>
 
 #include "rubdyn/core/demand.hpp"
+#include "rubdyn/core/run_envelope.hpp"
 #include "rubdyn/driver/simulate.hpp"
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
@@ -111,7 +112,17 @@ OneRun run_point(const CaseSpec& spec, const std::string& dir, const AnalysisOpt
       std::string write_error;
       {
         OutputFolder sink(dir, spec, own);
-        s = simulate(spec, sink, {}, stop);
+        // a point whose case sets no run.max_wall gets the default budget of its plan
+        // (core/run_envelope.hpp): a degenerate point ends with time_budget instead of holding
+        // its thread; case.resolved.toml keeps the case as given
+        CaseSpec budgeted = spec;
+        if (!(budgeted.run.max_wall > 0.0)) {
+          const SolverEntry* solver = find_solver(spec.solver.kind);
+          const double span = spec.run.t_end - spec.run.t_start;
+          budgeted.run.max_wall = default_wall_budget(
+              span, solver && solver->fixed_step ? span / spec.solver.h : 0.0);
+        }
+        s = simulate(budgeted, sink, {}, stop);
         write_error = sink.error();
       }
       r.termination = std::string(to_string(s.termination));
