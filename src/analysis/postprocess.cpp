@@ -442,9 +442,17 @@ RunVerdicts write_analysis(const RunRecord& r, const AnalysisOptions& o,
   // compute everything first: a bad option fails before any file is written
   auto d = derive(r);
   const RunVerdicts v = verdicts(r, d, o);
-  const Spectrum sp = full_spectrum(r, o);
-  // a run shorter than one spectrogram frame has no spectrogram (a short sweep point, say): the
-  // other results stand, and analysis.json says why the spectrogram is absent
+  // a run with too few samples for a spectrum (a huge output.dt: the initial and final states
+  // only) has none, and a run shorter than one spectrogram frame no spectrogram (a short sweep
+  // point, say): the other results stand, and analysis.json says why each is absent (the
+  // window and the options were checked by verdicts() above)
+  std::string sp_note;
+  Spectrum sp;
+  try {
+    sp = full_spectrum(r, o);
+  } catch (const std::invalid_argument& e) {
+    sp_note = e.what();
+  }
   std::string sg_note;
   Spectrogram sg;
   try {
@@ -491,8 +499,13 @@ RunVerdicts write_analysis(const RunRecord& r, const AnalysisOptions& o,
   }
   write_file_atomic((fs::path(dir) / "campbell.csv").string(), fmt::to_string(b));
   std::string json = verdicts_json(v);
-  json.insert(json.size() - 3, fmt::format(",\n  \"spectrogram\": \"{}\"",
-                                           sg_note.empty() ? "written" : "skipped: " + sg_note));
+  // (the notes quote paths: escaped as JSON strings)
+  json.insert(json.size() - 3,
+              fmt::format(",\n  \"spectrum\": {}",
+                          quoted_string(sp_note.empty() ? "written" : "skipped: " + sp_note)));
+  json.insert(json.size() - 3,
+              fmt::format(",\n  \"spectrogram\": {}",
+                          quoted_string(sg_note.empty() ? "written" : "skipped: " + sg_note)));
   if (sg_note.empty()) {
     // the frames whose samples alias the orbit's whirl (campbell.csv: f_whirl, undersampled)
     long bad = 0;

@@ -372,5 +372,13 @@ TEST_CASE("CLI: the issue's reproductions end in seconds with their exit codes",
               "output.dt=1e308 --out " + sh(dir.string()))
               .code == 0);
   CHECK(cli("compare " + sh(dir.string()) + " " + sh(dir.string())).code == 0);
+  // and analyze gives its verdicts, saying why the two samples have no spectrum
+  const CliOutcome a = cli("analyze " + sh(dir.string()));
+  INFO(a.err);
+  CHECK(a.code == 0);
+  const std::string json = slurp(dir / "analysis" / "analysis.json");
+  CHECK(has(json, "\"spectrum\": \"skipped: fewer than 8 samples"));
+  CHECK(has(json, "\"spectrogram\": \"skipped: "));
+  CHECK(has(json, "\"omega_max\": "));
   fs::remove_all(dir);
 }
