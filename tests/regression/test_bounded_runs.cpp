@@ -214,7 +214,20 @@ TEST_CASE("Bounded: a cut CVODE call changes nothing (max_steps_per_call still e
   CHECK(a.samples.back().q == b.samples.back().q);
   CHECK(a.samples.back().v == b.samples.back().v);
   REQUIRE(a.events.size() == b.events.size());
-  for (size_t i = 0; i < a.events.size(); ++i) CHECK(a.events[i].t == b.events[i].t);
+  for (size_t i = 0; i < a.events.size(); ++i) {
+    INFO("event " << i << " " << to_string(a.events[i].kind) << " at " << a.events[i].t);
+    CHECK(a.events[i].kind == b.events[i].kind);
+    if (a.events[i].kind != EventKind::Grazing) {
+      CHECK(a.events[i].t == b.events[i].t);
+    } else {
+      // a touch and go is a gap minimum, located as a root of v_N whose slope (the normal
+      // acceleration) is near 0 there: its time depends on how CVODE's root search brackets
+      // it, which the output times change (8e-7 s seen in the sanitizer build). It changes
+      // no state (free -> free: the final states above agree bit for bit); 1e-5 s only asks
+      // for the same gap minimum (the events around it are 1e-3 s and more apart).
+      CHECK(std::abs(a.events[i].t - b.events[i].t) < 1e-5);
+    }
+  }
   // the option's own limit per advance still ends a run
   EventDrivenOptions o;
   o.max_steps_per_call = 10;
