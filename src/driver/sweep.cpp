@@ -119,8 +119,8 @@ OneRun run_point(const CaseSpec& spec, const std::string& dir, const AnalysisOpt
         if (!(budgeted.run.max_wall > 0.0)) {
           const SolverEntry* solver = find_solver(spec.solver.kind);
           const double span = spec.run.t_end - spec.run.t_start;
-          budgeted.run.max_wall = default_wall_budget(
-              span, solver && solver->fixed_step ? span / spec.solver.h : 0.0);
+          budgeted.run.max_wall =
+              default_wall_budget(span, solver && solver->fixed_step ? span / spec.solver.h : 0.0);
         }
         s = simulate(budgeted, sink, {}, stop);
         write_error = sink.error();
