@@ -1007,6 +1007,8 @@ class Loader {
     if (nc && nc->as_string()) {
       read_early_.insert("rotor.coordinates");
       f.coordinates = nc->as_string()->get();
+    }
+    if (!f.coordinates.empty()) {  // (empty, as case.resolved.toml writes none: q0, q1, ...)
       std::string word;
       std::stringstream in(f.coordinates);
       while (std::getline(in, word, ',')) {
