@@ -9,6 +9,7 @@
 #include "commands.hpp"
 #include "rubdyn/analysis/derived.hpp"
 #include "rubdyn/io/case_io.hpp"
+#include "rubdyn/model/matrix_model.hpp"
 
 namespace rubdyn::app {
 
@@ -84,9 +85,31 @@ int check_jeffcott(const CaseSpec& c) {
   return 0;
 }
 
+/// Kind "matrices": what was read (its derived quantities are the user's: `rubdyn campbell`
+/// gives its frequencies).
+int check_matrices(const CaseSpec& c) {
+  const auto& p = c.matrices;
+  const MatrixModel m(p);
+  fmt::print("case {} ({}): valid\n", c.name, c.source);
+  fmt::print("a user's linear rotor (matrices), n = {}\n", p.rotor.size());
+  std::string names;
+  for (const auto& x : m.coordinates()) names += (names.empty() ? "" : ", ") + x.name;
+  fmt::print("  coordinates: {}\n", names);
+  for (const auto* f : {&c.matrix_files.M, &c.matrix_files.C, &c.matrix_files.K, &c.matrix_files.G,
+                        &c.matrix_files.f0})
+    if (!f->empty()) fmt::print("  read {}\n", *f);
+  const auto& cn = m.coordinates();
+  fmt::print("  contact node: ({}, {})\n", cn[static_cast<std::size_t>(p.node.x)].name,
+             cn[static_cast<std::size_t>(p.node.y)].name);
+  row("Schur complement of theta at q0", m.schur(c.initial.q0), "kg m^2 (> 0: M_full SPD)");
+  row("omega0", c.initial.v0[p.rotor.size()], "rad/s");
+  return 0;
+}
+
 int check_command(const CaseArgs& a) {
   const CaseSpec c = load_case(a.path, a.sets);  // throws CaseError: exit 2
   if (c.model == "jeffcott") return check_jeffcott(c);
+  if (c.model == "matrices") return check_matrices(c);
   const double omega0 = c.initial.v0[TH], omega_lim = c.run.omega_lim;
   const DerivedQuantities d = compute_derived_quantities(c.params, omega0, omega_lim);
   const double rpm = 30.0 / std::numbers::pi;

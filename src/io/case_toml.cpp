@@ -6,6 +6,8 @@
 #include <toml++/toml.h>
 #include <unistd.h>
 
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -17,10 +19,12 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "rubdyn/hybrid/event_driven.hpp"
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/matrix_files.hpp"
 #include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/io/solver_options.hpp"
 #include "rubdyn/io/text_files.hpp"
@@ -148,6 +152,50 @@ void jeffcott_keys(SchemaBuilder& b) {
   b.num("stator", "gap", true, [](CaseSpec& c) { return &c.jeffcott.stator.gap; });
 }
 
+void matrices_keys(SchemaBuilder& b) {
+  // the matrices' files (read as the model is read: they decide the coordinates)
+  const auto required = [](const CaseSpec&) { return true; };
+  b.text("rotor", "M", [](CaseSpec& c) { return &c.matrix_files.M; });
+  b.keys.back().required = required;
+  b.text("rotor", "C", [](CaseSpec& c) { return &c.matrix_files.C; });
+  b.keys.back().required = required;
+  b.text("rotor", "K", [](CaseSpec& c) { return &c.matrix_files.K; });
+  b.keys.back().required = required;
+  b.text("rotor", "G", [](CaseSpec& c) { return &c.matrix_files.G; });
+  b.keys.back().required = required;
+  b.text("rotor", "f0", [](CaseSpec& c) { return &c.matrix_files.f0; });
+  b.num("rotor", "Jp", true, [](CaseSpec& c) { return &c.matrices.rotor.Jp; });
+  b.text("rotor", "coordinates", [](CaseSpec& c) { return &c.matrix_files.coordinates; });
+  // one contact node for now (its keys become the entries of [[contact_node]] with several)
+  b.integer("contact_node", "x", [](CaseSpec& c) { return &c.matrices.node.x; });
+  b.keys.back().required = required;
+  b.integer("contact_node", "y", [](CaseSpec& c) { return &c.matrices.node.y; });
+  b.keys.back().required = required;
+  b.num("contact_node", "radius", true, [](CaseSpec& c) { return &c.matrices.node.radius; });
+  b.num("contact_node", "gap", true, [](CaseSpec& c) { return &c.matrices.node.gap; });
+  b.flag("stator", "rigid", [](CaseSpec& c) { return &c.matrices.stator.rigid; });
+  const auto sprung = [](const CaseSpec& c) { return !c.matrices.stator.rigid; };
+  const auto rigid_refuses = [](const CaseSpec& c) {
+    return c.matrices.stator.rigid
+               ? std::string(
+                     "a rigid stator (stator.rigid = true) is a fixed ring without "
+                     "mass, spring or damper: remove this key")
+               : std::string();
+  };
+  b.num(
+      "stator", "mass", false, [](CaseSpec& c) { return &c.matrices.stator.mass; }, rigid_refuses,
+      sprung);
+  b.num(
+      "stator", "k", false, [](CaseSpec& c) { return &c.matrices.stator.k; }, rigid_refuses,
+      sprung);
+  b.num(
+      "stator", "c", false, [](CaseSpec& c) { return &c.matrices.stator.c; }, rigid_refuses,
+      sprung);
+}
+
+/// The largest size n of a matrices model (its hot paths cost n^2 per solve).
+constexpr int kMaxMatrixSize = 1000;
+
 // ---- what every model has --------------------------------------------------------------------
 
 void contact_and_load_keys(SchemaBuilder& b) {
@@ -249,6 +297,8 @@ std::vector<KeySpec> schema(const CaseSpec& c) {
     jeffcott_keys(b);
   } else if (c.model == "rigid-rotor") {
     rigid_rotor_keys(b);
+  } else if (c.model == "matrices") {
+    matrices_keys(b);
   }
   contact_and_load_keys(b);
   if (find_model(c.model)) initial_keys(b, c);
@@ -451,6 +501,7 @@ class Loader {
           k.set(c, w->get());
       }
     }
+    if (c.model == "matrices") read_matrices(doc, c);
   }
 
   void check_structure(const toml::table& doc, CaseSpec& c, const std::vector<KeySpec>& keys) {
@@ -488,6 +539,13 @@ class Loader {
         continue;
       }
       const toml::table* sec = node.as_table();
+      if (!sec && key == "contact_node" && node.is_array()) {
+        issue(key, &node, node_text(node),
+              fmt::format("{} contact nodes ([[contact_node]]): one contact node for now, as a "
+                          "section [contact_node] (the solvers handle one contact)",
+                          node.as_array()->size()));
+        continue;
+      }
       if (!sec) {
         issue(key, &node, node_text(node), "must be a section ([" + key + "])");
         continue;
@@ -601,7 +659,8 @@ class Loader {
           break;
         case Kind::String:
           if (auto s = n->as_string()) {
-            if (full != "model.kind") *ks.text(c) = s->get();  // (read_model has it)
+            // (read_model has model.kind, and the files of kind "matrices", resolved)
+            if (full != "model.kind" && !read_early_.count(full)) *ks.text(c) = s->get();
           } else {
             issue(full, n, node_text(*n), "must be a string");
           }
@@ -651,11 +710,13 @@ class Loader {
     const std::size_t before = issues_.size();
     if (c.model == "jeffcott") {
       jeffcott_rules(c);
+    } else if (c.model == "matrices") {
+      matrices_rules(c);
     } else {
       rigid_rotor_rules(c);
     }
     load_rules(c);
-    const bool model_valid = issues_.size() == before;
+    const bool model_valid = issues_.size() == before && buildable_;
     common_rules(c);
     // The initial state must not penetrate the stator (d_N >= 0 at every contact), checked on
     // the model itself once its parameters are valid. A state on the constraint written by a
@@ -713,19 +774,20 @@ class Loader {
       }
     }
     // the rim speed R_r |omega0| against the speed no solid is rigid at (run_envelope.hpp)
-    const double R = c.model == "jeffcott" ? c.jeffcott.rotor.radius : c.params.rotor.radius;
+    const double R = model.contact_radius(0);
+    const std::string radius_key = c.model == "matrices" ? "contact_node.radius" : "rotor.radius";
     const double omega0 =
         model.spin_coordinate() >= 0 ? std::abs(model.spin(s0.t, s0.q, s0.v)) : 0.0;
     const double rim = R * omega0;
     if (what.empty() && std::isfinite(E) && !(rim <= kMaxContactSpeed)) {
       const bool by_radius = std::abs(R) > omega0 || !given("initial.omega0");
-      const std::string key = by_radius ? "rotor.radius" : "initial.omega0";
+      const std::string key = by_radius ? radius_key : "initial.omega0";
       const toml::node* n = at(key);
       issue(key, n, n ? node_text(*n) : "(default)",
-            fmt::format("the initial rim speed rotor.radius x |initial.omega0| = {:.3g} m/s must "
+            fmt::format("the initial rim speed {} x |initial.omega0| = {:.3g} m/s must "
                         "be <= {:.3g} m/s (no solid is rigid at that speed: elastic waves travel "
                         "at 6 km/s in steel, 13 km/s in beryllium)",
-                        rim, kMaxContactSpeed));
+                        radius_key, rim, kMaxContactSpeed));
       return;
     }
     if (what.empty()) return;
@@ -813,6 +875,225 @@ class Loader {
     rule(s.gap > 0, "stator.gap", s.gap, "must be > 0 (the radial clearance g0)");
   }
 
+  // ---- kind "matrices": the user's matrix files --------------------------------------------
+
+  /// Reads the matrix files named in [rotor] (relative to the case file's folder) and the
+  /// coordinates' names: they decide the model's coordinates, hence the [initial] keys. Their
+  /// problems wait in matrix_issues_ for matrices_rules; the paths become absolute (so that
+  /// case.resolved.toml, in another folder, names the files that were read).
+  void read_matrices(const toml::table& doc, CaseSpec& c) {
+    const toml::node* sec = doc.get("rotor");
+    const toml::table* rot = sec ? sec->as_table() : nullptr;
+    const std::filesystem::path base = std::filesystem::path(source_).parent_path();
+    auto pend = [&](const std::string& key, const toml::node* n, std::string value,
+                    std::string why) {
+      const Origin o = origin(key, n);
+      matrix_issues_.push_back({o.file, o.line, key, std::move(value), std::move(why)});
+      matrices_ok_ = false;
+    };
+    auto load = [&](const std::string& k, std::string& path, Mat& m) -> const toml::node* {
+      const std::string key = "rotor." + k;
+      const toml::node* n = rot ? rot->get(k) : nullptr;
+      if (!n || !n->as_string()) {
+        if (k != "f0") matrices_ok_ = false;  // (missing or not a string: read_values says so)
+        return nullptr;
+      }
+      const std::string given = n->as_string()->get();
+      if (given.empty() && k == "f0") {  // (no constant load, as case.resolved.toml writes it)
+        read_early_.insert(key);
+        return nullptr;
+      }
+      std::filesystem::path p(given);
+      if (p.is_relative()) p = base / p;
+      std::error_code ec;
+      const std::filesystem::path abs = std::filesystem::absolute(p, ec);
+      path = (ec ? p : abs).lexically_normal().string();
+      read_early_.insert(key);
+      try {
+        m = read_matrix_file(path);
+      } catch (const MatrixFileError& e) {
+        pend(key, n, toml_quote(given), fmt::format("the file {}: {}", path, e.what()));
+        return nullptr;
+      }
+      return n;
+    };
+    MatrixFiles& f = c.matrix_files;
+    MatrixRotorParams& r = c.matrices.rotor;
+    Mat M, C, K, G, f0;
+    const toml::node* nM = load("M", f.M, M);
+    const toml::node* nC = load("C", f.C, C);
+    const toml::node* nK = load("K", f.K, K);
+    const toml::node* nG = load("G", f.G, G);
+    const toml::node* nf = load("f0", f.f0, f0);
+    const auto shape = [](const Mat& a) { return fmt::format("{} x {}", a.rows(), a.cols()); };
+    const auto quoted = [](const toml::node* n) { return node_text(*n); };
+    long n = -1;
+    if (nM) {
+      if (M.rows() != M.cols() || M.rows() < 2 || M.rows() > kMaxMatrixSize) {
+        pend("rotor.M", nM, quoted(nM),
+             fmt::format("must be a square matrix of size n in [2, {}] (read {})", kMaxMatrixSize,
+                         shape(M)));
+      } else {
+        n = M.rows();
+      }
+    }
+    // the other matrices: n x n, with their symmetry
+    const auto sym_error = [](const Mat& a, int sign) {
+      // largest |a_ij - sign a_ji| and where, against 1e-12 of the largest entry (a file
+      // written from formulas may carry round-off; the matrix is then used as (A +- A^T) / 2)
+      Eigen::Index bi = 0, bj = 0;
+      const double d = (a - sign * a.transpose()).cwiseAbs().maxCoeff(&bi, &bj);
+      const double tol = 1e-12 * a.cwiseAbs().maxCoeff();
+      return std::tuple<bool, double, Eigen::Index, Eigen::Index>{d <= tol, d, bi, bj};
+    };
+    const auto square = [&](const char* k, const toml::node* nd, const Mat& a) {
+      if (!nd || n < 0) return false;
+      if (a.rows() != n || a.cols() != n) {
+        pend(std::string("rotor.") + k, nd, quoted(nd),
+             fmt::format("must be {} x {} as rotor.M is (read {})", n, n, shape(a)));
+        return false;
+      }
+      return true;
+    };
+    const auto symmetric = [&](const char* k, const toml::node* nd, Mat& a, int sign,
+                               const char* what) {
+      const auto [ok, d, i, j] = sym_error(a, sign);
+      if (!ok) {
+        pend(std::string("rotor.") + k, nd, quoted(nd),
+             fmt::format("must be {}: entries ({}, {}) and ({}, {}) differ by {:.3g} from it, "
+                         "above 1e-12 of its largest entry",
+                         what, i, j, j, i, d));
+        return false;
+      }
+      a = 0.5 * (a + sign * Mat(a.transpose()));  // (exact when it already was)
+      return true;
+    };
+    if (n >= 0 && symmetric("M", nM, M, 1, "symmetric (a mass matrix)")) {
+      Eigen::LLT<Mat> llt(M);
+      if (llt.info() != Eigen::Success)
+        pend("rotor.M", nM, quoted(nM),
+             "must be positive definite (a mass matrix): its Cholesky factorisation fails");
+    }
+    if (square("C", nC, C) &&
+        symmetric("C", nC, C, 1, "symmetric (a damping matrix; docs/models.md, 5)")) {
+      const double lo =
+          Eigen::SelfAdjointEigenSolver<Mat>(C, Eigen::EigenvaluesOnly).eigenvalues().minCoeff();
+      if (lo < -1e-12 * C.cwiseAbs().maxCoeff())
+        pend("rotor.C", nC, quoted(nC),
+             fmt::format("must be positive semidefinite (a damping: it dissipates); its smallest "
+                         "eigenvalue is {:.6g}",
+                         lo));
+    }
+    if (square("K", nK, K))
+      symmetric("K", nK, K, 1,
+                "symmetric (a stiffness with a potential; docs/models.md, 5: non-symmetric "
+                "bearing stiffness is not modelled)");
+    if (square("G", nG, G)) symmetric("G", nG, G, -1, "skew-symmetric (a gyroscopic matrix)");
+    if (nf && n >= 0) {
+      if (f0.cols() == 1 && f0.rows() == n) {
+        // a column
+      } else if (f0.rows() == 1 && f0.cols() == n) {
+        f0.transposeInPlace();
+      } else {
+        pend("rotor.f0", nf, quoted(nf),
+             fmt::format("must hold n = {} numbers (a row or a column; read {})", n, shape(f0)));
+      }
+    } else if (n >= 0) {
+      f0 = Vec::Zero(n);
+    }
+    // the coordinates' names
+    std::vector<std::string> names;
+    const toml::node* nc = rot ? rot->get("coordinates") : nullptr;
+    if (nc && nc->as_string()) {
+      read_early_.insert("rotor.coordinates");
+      f.coordinates = nc->as_string()->get();
+    }
+    if (!f.coordinates.empty()) {  // (empty, as case.resolved.toml writes none: q0, q1, ...)
+      std::string word;
+      std::stringstream in(f.coordinates);
+      while (std::getline(in, word, ',')) {
+        const auto a = word.find_first_not_of(" \t"), b = word.find_last_not_of(" \t");
+        names.push_back(a == std::string::npos ? "" : word.substr(a, b - a + 1));
+      }
+      // each name a column of timeseries.csv and an [initial] key; so is "v" + name
+      std::set<std::string> taken = {"t",   "theta", "omega", "omega0", "x_s",
+                                     "y_s", "vx_s",  "vy_s",  "d_N",    "v_N",
+                                     "v_t", "F_N",   "F_T",   "phase",  "drive_torque"};
+      std::string bad;
+      for (const auto& w : names) {
+        const bool ident = !w.empty() &&
+                           (std::isalpha(static_cast<unsigned char>(w[0])) || w[0] == '_') &&
+                           std::all_of(w.begin(), w.end(), [](char ch) {
+                             return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_';
+                           });
+        if (!ident) {
+          bad = fmt::format("'{}' is not a name (letters, digits and _, not first a digit)", w);
+          break;
+        }
+        std::string rate = "v";  // (appended: g++ 12 warns falsely about "v" + w)
+        rate.append(w);
+        if (!taken.insert(w).second || !taken.insert(rate).second) {
+          bad = fmt::format("'{}' (or its rate 'v{}') is taken by another coordinate or column", w,
+                            w);
+          break;
+        }
+      }
+      if (bad.empty() && n >= 0 && static_cast<long>(names.size()) != n)
+        bad = fmt::format("names {} coordinates where rotor.M has n = {}", names.size(), n);
+      if (!bad.empty()) {
+        pend("rotor.coordinates", nc, quoted(nc),
+             "must name the n coordinates of q, separated by commas: " + bad);
+        names.clear();
+      }
+    }
+    if (!matrices_ok_) {
+      // the coordinates of what could be read (so that [initial] is still checked)
+      r.M.resize(n >= 0 ? n : 0, n >= 0 ? n : 0);
+      r.names = names;
+      return;
+    }
+    r.M = std::move(M);
+    r.C = std::move(C);
+    r.K = std::move(K);
+    r.G = std::move(G);
+    r.f0 = f0;
+    r.names = std::move(names);
+  }
+
+  void matrices_rules(const CaseSpec& c) {
+    const std::size_t before = issues_.size();
+    issues_.insert(issues_.end(), matrix_issues_.begin(), matrix_issues_.end());
+    const MatrixParams& p = c.matrices;
+    const int n = p.rotor.size();
+    rule(p.rotor.Jp > 0, "rotor.Jp", p.rotor.Jp, "must be > 0 (a moment of inertia)");
+    if (n >= 2) {
+      for (const auto& [key, i] :
+           {std::pair<const char*, int>{"contact_node.x", p.node.x}, {"contact_node.y", p.node.y}})
+        rule(i >= 0 && i < n, key, i,
+             fmt::format("must be the 0-based index of a coordinate of q, in [0, {}]", n - 1));
+      rule(p.node.x != p.node.y, "contact_node.y", p.node.y,
+           "must differ from contact_node.x (the node's two coordinates)");
+    }
+    rule(p.node.radius > 0, "contact_node.radius", p.node.radius, "must be > 0 (a length)");
+    rule(p.node.gap > 0, "contact_node.gap", p.node.gap, "must be > 0 (the radial clearance g0)");
+    const auto& s = p.stator;
+    if (!s.rigid) {
+      rule(s.mass > 0, "stator.mass", s.mass, "must be > 0 (a mass)");
+      rule(s.k > 0, "stator.k", s.k, "must be > 0 (a stiffness)");
+      rule(s.c >= 0, "stator.c", s.c, "must be >= 0 (a damping)");
+    }
+    buildable_ = matrices_ok_;
+    if (!matrices_ok_ || issues_.size() != before) return;
+    // M_full(q) = [[M, b], [b^T, Jp]] is positive definite where the Schur complement
+    // Jp - b^T M^-1 b of theta is > 0 (docs/models.md, 5.3): required of the initial state
+    const double schur = MatrixModel(p).schur(c.initial.q0);
+    rule(schur > 0, "rotor.Jp", p.rotor.Jp,
+         fmt::format("must exceed b^T M^-1 b = {:.6g} kg m^2 at the initial state (b = G q / 2 "
+                     "+ the unbalance's column; docs/models.md, 5.3): M_full is not positive "
+                     "definite there",
+                     p.rotor.Jp - schur));
+  }
+
   void load_rules(const CaseSpec& c) {
     const LoadParams& L = c.loads();
     rule(L.gravity >= 0, "loads.gravity", L.gravity, "must be >= 0 (its direction is fixed: -Y)");
@@ -890,6 +1171,12 @@ class Loader {
   std::set<std::string> overridden_;
   std::map<std::string, const toml::node*> present_;
   bool model_known_ = true;  // [model] kind names a model of the registry
+  // kind "matrices": the keys read_model resolved (read_values keeps them), the problems of the
+  // files (reported by matrices_rules), whether every matrix was read and is valid
+  std::set<std::string> read_early_;
+  std::vector<CaseIssue> matrix_issues_;
+  bool matrices_ok_ = true;
+  bool buildable_ = true;  // the model can be built (with valid parameters)
 };
 
 }  // namespace

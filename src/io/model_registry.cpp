@@ -5,6 +5,7 @@
 #include <string>
 
 #include "rubdyn/model/jeffcott_model.hpp"
+#include "rubdyn/model/matrix_model.hpp"
 #include "rubdyn/model/prescribed_spin.hpp"
 #include "rubdyn/model/rotor_stator_model.hpp"
 
@@ -28,6 +29,14 @@ std::unique_ptr<LagrangianModel> build_jeffcott(const CaseSpec& spec) {
   return std::make_unique<JeffcottModel>(spec.jeffcott);
 }
 
+std::vector<Coordinate> matrices_coordinates(const CaseSpec& spec) {
+  const MatrixParams& p = spec.matrices;
+  return matrix_model_coordinates(p.rotor.size(), p.rotor.names, p.node, p.stator.rigid);
+}
+std::unique_ptr<LagrangianModel> build_matrices(const CaseSpec& spec) {
+  return std::make_unique<MatrixModel>(spec.matrices);
+}
+
 }  // namespace
 
 const std::vector<ModelEntry>& model_registry() {
@@ -43,6 +52,12 @@ const std::vector<ModelEntry>& model_registry() {
        {"rotor", "stator"},
        &jeffcott_coordinates,
        &build_jeffcott},
+      {"matrices",
+       "a user's linear rotor: M, C, K, G (and a load f0) read from files, the spin an unknown, "
+       "one contact node inside a sprung or rigid stator",
+       {"rotor", "contact_node", "stator"},
+       &matrices_coordinates,
+       &build_matrices},
   };
   return table;
 }

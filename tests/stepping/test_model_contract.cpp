@@ -1,5 +1,6 @@
 // The solver contract on the rotor models and their loads: every solver (the event-driven
-// integrator and the four fixed-step schemes) on the rigid rotor and the Jeffcott rotor, with a
+// integrator and the four fixed-step schemes) on the rigid rotor, the Jeffcott rotor and the
+// paper's rotor written as matrices (kind = "matrices"), with a
 // mass unbalance, the linear torque law and a prescribed (ramped) speed. Each run must complete,
 // keep Signorini and Coulomb, close its energy balance (the drive's work included: a prescribed
 // speed's holding torque), follow a prescribed speed exactly, and the fixed-step schemes must
@@ -52,6 +53,11 @@ std::vector<Scene> scenes() {
        {"stator.rigid=true", "loads.spin=\"prescribed\"", "loads.spin_accel=-2000",
         "loads.torque=0"},
        0.012},
+      // the paper's rotor as matrices (kind = "matrices"), its unbalance at the contact node
+      {"matrices (paper rotor), unbalance",
+       RUBDYN_SOURCE_DIR "/cases/matrices-paper.toml",
+       {"loads.unbalance=1e-4", "loads.gravity=9.81"},
+       0.012},
   };
 }
 
@@ -78,7 +84,7 @@ CaseSpec case_of(const Scene& sc) {
     }
     sets.push_back(s);
   }
-  return parse_case(text, sc.name, sets);
+  return parse_case(text, sc.file, sets);  // (the file's folder: where its matrices are)
 }
 
 double flows(const RunSummary& s) {

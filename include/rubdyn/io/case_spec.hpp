@@ -7,6 +7,7 @@
 
 #include "rubdyn/core/types.hpp"
 #include "rubdyn/model/jeffcott_model.hpp"
+#include "rubdyn/model/matrix_model.hpp"
 #include "rubdyn/model/rotor_stator_model.hpp"
 #include "rubdyn/model/rotor_stator_params.hpp"
 
@@ -58,6 +59,14 @@ struct OutputOptions {
   std::string folder;  ///< output folder (empty: out/<case name>)
 };
 
+/// [rotor] of kind "matrices": the files of the user's matrices, as given in the case file
+/// (relative to its folder) until the case is read, then absolute (case.resolved.toml names
+/// the files that were read), and the coordinates' names as written.
+struct MatrixFiles {
+  std::string M, C, K, G, f0;  ///< f0 empty: no constant load
+  std::string coordinates;     ///< "x_b, y_b, x_r, y_r"; empty: q0, q1, ...
+};
+
 struct CaseSpec {
   std::string name;    ///< case name (file stem unless given)
   std::string source;  ///< path of the case file (for messages)
@@ -65,6 +74,8 @@ struct CaseSpec {
   std::string model = "rigid-rotor";
   RotorStatorParams params;  ///< the parameters of kind "rigid-rotor"
   JeffcottParams jeffcott;   ///< the parameters of kind "jeffcott"
+  MatrixParams matrices;     ///< the parameters of kind "matrices" (the matrices read)
+  MatrixFiles matrix_files;  ///< where kind "matrices" read them
   InitialState initial;
   RunOptions run;
   SolverOptions solver;
@@ -72,11 +83,25 @@ struct CaseSpec {
 
   /// The contact law and the loads of the case's model ([contact], [loads]).
   const ContactLaw& contact() const {
-    return model == "jeffcott" ? jeffcott.contact : params.contact;
+    return model == "jeffcott"   ? jeffcott.contact
+           : model == "matrices" ? matrices.contact
+                                 : params.contact;
   }
-  ContactLaw& contact() { return model == "jeffcott" ? jeffcott.contact : params.contact; }
-  const LoadParams& loads() const { return model == "jeffcott" ? jeffcott.loads : params.loads; }
-  LoadParams& loads() { return model == "jeffcott" ? jeffcott.loads : params.loads; }
+  ContactLaw& contact() {
+    return model == "jeffcott"   ? jeffcott.contact
+           : model == "matrices" ? matrices.contact
+                                 : params.contact;
+  }
+  const LoadParams& loads() const {
+    return model == "jeffcott"   ? jeffcott.loads
+           : model == "matrices" ? matrices.loads
+                                 : params.loads;
+  }
+  LoadParams& loads() {
+    return model == "jeffcott"   ? jeffcott.loads
+           : model == "matrices" ? matrices.loads
+                                 : params.loads;
+  }
 };
 
 }  // namespace rubdyn

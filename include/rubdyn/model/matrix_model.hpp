@@ -1,0 +1,142 @@
+#pragma once
+// A user's own linear rotor (case file: [model] kind = "matrices"; derivation in
+// docs/models.md, section 5): n lateral coordinates q with the constant matrices M (symmetric
+// positive definite), C and K (symmetric), G (skew-symmetric: the gyroscopic matrix per unit
+// spin speed) and a constant load f0, plus the spin angle theta (an unknown) with the polar
+// inertia Jp, and one contact node: two of the q, (x, y), are the centre of a seal circle of
+// radius R inside a stator ring across the clearance g0.
+//
+// Coordinates (q_1..q_n, theta, x_s, y_s); with a rigid stator (stator.rigid) no x_s, y_s.
+// With psi = theta + phi_u and u_b the unbalance at the node (its mass centre at
+// (x, y) + eps e^{i psi}):
+//   T = 1/2 q'^T M q' + 1/2 Jp theta'^2 - 1/2 theta' q^T G q'
+//       + u_b theta' (y' cos psi - x' sin psi) + 1/2 m_s |z_s'|^2,
+//   V = 1/2 q^T K q - f0^T q + g u_b sin psi + 1/2 k_s |z_s|^2 + g m_s y_s,
+//   M_full(q) = [[M, b], [b^T, Jp]] (+ m_s I),  b = 1/2 G q + u_b (-sin psi e_x + cos psi e_y),
+//   f_q = f0 - C q' - K q - theta' G q' + u_b theta'^2 (cos psi e_x + sin psi e_y),
+//   f_theta = tau(theta') - u_b g cos psi,  f_s = -c_s z_s' - k_s z_s - m_s g e_y.
+// The paper's rigid rotor is the case q = (x_b, y_b, x_r, y_r), node (x_r, y_r), G = H (...)
+// (rotor_stator_model.hpp), f0 its weight, no stator weight (loads.gravity = 0).
+//
+// Structured mass solve: M is factored once (LLT) and M^-1 G, M^-1 e_x, M^-1 e_y are kept, so
+// that u = M^-1 b costs n^2 flops; the Schur complement s = Jp - b.u on theta, then
+//   theta'' = (r_theta - b.M^-1 r_q) / s,  q'' = M^-1 r_q - u theta''.
+// s > 0 is required of an initial state (case validation); a state where it is not (M_full
+// not positive definite: |q| far beyond the linear model's range) makes the solve return NaN,
+// which the solvers end as a non-finite state (Termination::NonFinite).
+//
+// Minimal coordinates of the contact phases, as the Jeffcott rotor's with the other rotor
+// coordinates passing through: slip p = (q without the node's (x, y), phi in their place,
+// theta, x_s, y_s); stick p = (the same with theta - theta0 in phi's place and no theta).
+#include <string>
+#include <vector>
+
+#include "rubdyn/model/lagrangian_model.hpp"
+#include "rubdyn/model/loads.hpp"
+
+namespace rubdyn {
+
+struct MatrixRotorParams {
+  Mat M, C, K, G;  ///< n x n (n >= 2)
+  Vec f0;          ///< n, the constant load (e.g. the rotor's weight)
+  double Jp = 0.06;
+  /// The names of q (n); empty: q0, q1, ...
+  std::vector<std::string> names;
+  int size() const { return static_cast<int>(M.rows()); }
+};
+
+/// The contact node (one for now; a list of them comes with the K-contact solver).
+struct MatrixContactNode {
+  int x = 0, y = 1;      ///< 0-based indices into q of the seal circle's centre
+  double radius = 0.05;  ///< R [m]
+  double gap = 2.0e-4;   ///< g0 [m]
+};
+
+struct MatrixStatorParams {
+  bool rigid = false;  ///< a fixed ring at the origin
+  double mass = 2.0, k = 2.0e6, c = 100.0;
+};
+
+struct MatrixParams {
+  MatrixRotorParams rotor;
+  MatrixContactNode node;
+  MatrixStatorParams stator;
+  ContactLaw contact{0.1, 0.0, 0.0};
+  LoadParams loads;
+};
+
+/// The coordinates of a matrices model of size n with these names (empty: q0..q{n-1}).
+std::vector<Coordinate> matrix_model_coordinates(int n, const std::vector<std::string>& names,
+                                                 const MatrixContactNode& node, bool rigid);
+
+class MatrixModel final : public LagrangianModel {
+ public:
+  /// Requires M symmetric positive definite (RUBDYN_DEMAND; the case validation checks it).
+  explicit MatrixModel(const MatrixParams& p);
+
+  std::string_view name() const override { return "matrices"; }
+  int num_dofs() const override { return N_; }
+  const std::vector<Coordinate>& coordinates() const override { return coords_; }
+  void mass_matrix(VecIn q, MatOut M) const override;
+  void mass_product(VecIn q, VecIn x, VecOut y) const override;
+  void solve_mass(VecIn q, MatOut B) const override;
+  void mass_matrix_product_jacobian(VecIn q, VecIn a, MatOut J) const override;
+  void smooth_forces(double t, VecIn q, VecIn v, VecOut f) const override;
+  void smooth_force_jacobians(double t, VecIn q, VecIn v, MatOut dfdq, MatOut dfdv) const override;
+  void compute_contact(int k, double t, VecIn q, VecIn v, ContactKinematics& c) const override;
+  double kinetic_energy(double t, VecIn q, VecIn v) const override;
+  double potential_energy(double t, VecIn q) const override;
+  SmoothPower smooth_power(double t, VecIn q, VecIn v) const override;
+  double gap_scale(int /*k*/ = 0) const override { return p_.node.gap; }
+  const ContactLaw& contact_law(int /*k*/ = 0) const override { return p_.contact; }
+  double contact_radius(int /*k*/ = 0) const override { return p_.node.radius; }
+  const ContactChart* contact_chart() const override { return &chart_; }
+  int spin_coordinate() const override { return th_; }
+  /// Free: (q, x_s, y_s) with M, G, C, K and the stator's; Tied: q with the stator's mass,
+  /// damper and spring added on the node's (x, y). `nodes`: the contact node (and the stator).
+  std::optional<LinearModel> linearize(Linearization mode) const override;
+
+  /// The Schur complement Jp - b^T M^-1 b of theta at q (> 0 where M_full is positive definite).
+  double schur(VecIn q) const;
+  const MatrixParams& params() const { return p_; }
+
+ private:
+  class Chart final : public ContactChart {
+   public:
+    explicit Chart(const MatrixModel& m) : m_(m) {}
+    int dim(ChartMode mode) const override;
+    void chart(ChartMode mode, VecIn q, VecIn v, ChartAnchor& anchor, VecOut p,
+               VecOut pd) const override;
+    void embed(ChartMode mode, const ChartAnchor& anchor, VecIn p, VecIn pd, VecOut q,
+               VecOut v) const override;
+    void reduce(ChartMode mode, const ChartAnchor& anchor, VecIn p, VecIn pd, VecIn q, VecIn a,
+                VecOut pdd) const override;
+    ChartScales scales(ChartMode mode) const override;
+
+   private:
+    const MatrixModel& m_;
+  };
+
+  /// b_i(q), the theta column of M_full (row i < n).
+  double b(int i, VecIn q, double ubs, double ubc) const;
+  /// u_i = (M^-1 b)_i.
+  double u(int i, VecIn q, double ubs, double ubc) const;
+  /// (u_b sin psi, u_b cos psi), zeros without an unbalance.
+  void unbalance_terms(VecIn q, double& ubs, double& ubc) const;
+
+  MatrixParams p_;
+  int n_, N_, th_, xs_ = -1, ys_ = -1, ix_, iy_;
+  bool sprung_;
+  std::vector<Coordinate> coords_;
+  Mat L_;        ///< M = L L^T
+  Mat MinvG_;    ///< M^-1 G
+  Vec mx_, my_;  ///< M^-1 e_x, M^-1 e_y
+  // the transposes, so that row i of G, C, K is a contiguous column
+  Mat Gt_, Ct_, Kt_;
+  /// slot of phi among the reduced rotor coordinates; the other rotor coordinates, in order
+  int slot_;
+  std::vector<int> others_;
+  Chart chart_;
+};
+
+}  // namespace rubdyn

@@ -1,0 +1,215 @@
+// Matrix files (CSV, NumPy .npy) of a user's linear rotor: io/matrix_files.hpp.
+#include "rubdyn/io/matrix_files.hpp"
+
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+namespace rubdyn {
+
+namespace {
+
+[[noreturn]] void fail(const std::string& why) {
+  throw MatrixFileError(why);
+}
+
+bool ends_with(const std::string& s, const std::string& tail) {
+  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+std::string read_bytes(const std::string& path) {
+  // as load_case: opened without waiting, only a regular file read, at most the limit + 1
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
+  if (fd < 0) fail(std::string("cannot read the file: ") + std::strerror(errno));
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    const bool dir = S_ISDIR(st.st_mode);
+    ::close(fd);
+    fail(dir ? "is a directory, not a matrix file" : "is not a regular file: not read");
+  }
+  std::string text(kMaxMatrixFileBytes + 1, '\0');
+  std::size_t got = 0;
+  while (got < text.size()) {
+    const ssize_t n = ::read(fd, text.data() + got, text.size() - got);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      const int err = errno;
+      ::close(fd);
+      fail(std::string("cannot read the file: ") + std::strerror(err));
+    }
+    if (n == 0) break;
+    got += static_cast<std::size_t>(n);
+  }
+  ::close(fd);
+  text.resize(got);
+  if (text.size() > kMaxMatrixFileBytes)
+    fail(fmt::format("a file larger than {} bytes: not read", kMaxMatrixFileBytes));
+  return text;
+}
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r'))
+    s.remove_suffix(1);
+  return s;
+}
+
+Mat parse_csv(const std::string& text) {
+  std::vector<std::vector<double>> rows;
+  std::size_t line_no = 0, pos = 0;
+  while (pos < text.size()) {
+    std::size_t end = text.find('\n', pos);
+    if (end == std::string::npos) end = text.size();
+    const std::string_view line = trim(std::string_view(text).substr(pos, end - pos));
+    pos = end + 1;
+    ++line_no;
+    if (line.empty() || line.front() == '#') continue;
+    std::vector<double> row;
+    std::size_t a = 0;
+    for (int col = 1;; ++col) {
+      std::size_t b = line.find(',', a);
+      if (b == std::string_view::npos) b = line.size();
+      std::string_view field = trim(line.substr(a, b - a));
+      const std::string shown(field);
+      if (!field.empty() && field.front() == '+') field.remove_prefix(1);
+      double x = 0.0;
+      const auto r = std::from_chars(field.data(), field.data() + field.size(), x);
+      if (field.empty() || r.ec != std::errc() || r.ptr != field.data() + field.size())
+        fail(
+            fmt::format("line {}, column {}: '{}' is not a number (CSV: numbers separated by "
+                        "commas, no header)",
+                        line_no, col, shown));
+      if (!std::isfinite(x))
+        fail(fmt::format("line {}, column {}: {} is not finite", line_no, col, shown));
+      row.push_back(x);
+      if (b == line.size()) break;
+      a = b + 1;
+    }
+    if (!rows.empty() && row.size() != rows.front().size())
+      fail(
+          fmt::format("line {}: {} numbers, where the first row has {} (every row must have "
+                      "the same count)",
+                      line_no, row.size(), rows.front().size()));
+    rows.push_back(std::move(row));
+  }
+  if (rows.empty()) fail("holds no numbers");
+  Mat m(static_cast<Eigen::Index>(rows.size()), static_cast<Eigen::Index>(rows.front().size()));
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    for (std::size_t j = 0; j < rows[i].size(); ++j)
+      m(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = rows[i][j];
+  // one number per row: a column
+  return m;
+}
+
+/// The value of 'key': ... in a .npy header dictionary (the text up to the next ',' or '}' at
+/// the same nesting level), or "" when absent.
+std::string header_value(const std::string& h, const std::string& key) {
+  std::size_t k = h.find("'" + key + "'");
+  if (k == std::string::npos) k = h.find("\"" + key + "\"");
+  if (k == std::string::npos) return "";
+  std::size_t c = h.find(':', k);
+  if (c == std::string::npos) return "";
+  std::size_t i = c + 1, depth = 0;
+  std::string v;
+  for (; i < h.size(); ++i) {
+    const char ch = h[i];
+    if (ch == '(') ++depth;
+    if (ch == ')') --depth;
+    if (depth == 0 && (ch == ',' || ch == '}')) break;
+    v += ch;
+  }
+  return std::string(trim(v));
+}
+
+Mat parse_npy(const std::string& bytes) {
+  static const char magic[] = "\x93NUMPY";
+  if (bytes.size() < 10 || bytes.compare(0, 6, magic, 6) != 0)
+    fail("not a NumPy .npy file (no \\x93NUMPY magic string)");
+  const auto u8 = [&](std::size_t i) {
+    return static_cast<std::uint32_t>(static_cast<unsigned char>(bytes[i]));
+  };
+  const unsigned major = u8(6);
+  std::size_t hlen = 0, start = 0;
+  if (major == 1) {
+    hlen = u8(8) | (u8(9) << 8);
+    start = 10;
+  } else if (major == 2 || major == 3) {
+    if (bytes.size() < 12) fail("a truncated .npy header");
+    hlen = u8(8) | (u8(9) << 8) | (u8(10) << 16) | (u8(11) << 24);
+    start = 12;
+  } else {
+    fail(fmt::format(".npy format version {} (versions 1 to 3 are read)", major));
+  }
+  if (start + hlen > bytes.size()) fail("a truncated .npy header");
+  const std::string h = bytes.substr(start, hlen);
+  const std::string descr = header_value(h, "descr");
+  if (descr != "'<f8'" && descr != "\"<f8\"")
+    fail(
+        fmt::format("dtype {} (must be float64, little-endian: '<f8'; numpy: "
+                    "a.astype('<f8'))",
+                    descr.empty() ? "(none)" : descr));
+  const std::string order = header_value(h, "fortran_order");
+  if (order != "True" && order != "False")
+    fail("no fortran_order True or False in the .npy header");
+  std::string shape = header_value(h, "shape");
+  if (shape.size() < 2 || shape.front() != '(' || shape.back() != ')')
+    fail("no shape tuple in the .npy header");
+  shape = shape.substr(1, shape.size() - 2);
+  std::vector<long> dims;
+  std::size_t a = 0;
+  while (a < shape.size()) {
+    std::size_t b = shape.find(',', a);
+    if (b == std::string::npos) b = shape.size();
+    const std::string_view f = trim(std::string_view(shape).substr(a, b - a));
+    if (!f.empty()) {
+      long d = -1;
+      const auto r = std::from_chars(f.data(), f.data() + f.size(), d);
+      if (r.ec != std::errc() || r.ptr != f.data() + f.size() || d < 0)
+        fail(fmt::format("shape ({}) in the .npy header is not a tuple of sizes", shape));
+      dims.push_back(d);
+    }
+    a = b + 1;
+  }
+  if (dims.empty() || dims.size() > 2)
+    fail(fmt::format("a {}-D array (a matrix file holds a 1-D or 2-D array)", dims.size()));
+  const long rows = dims[0], cols = dims.size() == 2 ? dims[1] : 1;
+  const std::size_t data = start + hlen;
+  const std::size_t want = static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols) * 8;
+  if (bytes.size() - data != want)
+    fail(fmt::format("{} bytes of data where shape ({}) of float64 needs {}", bytes.size() - data,
+                     shape, want));
+  if (rows == 0 || cols == 0) fail("an empty array");
+  Mat m(rows, cols);
+  const bool fortran = order == "True";
+  for (long k = 0; k < rows * cols; ++k) {
+    std::uint64_t bits = 0;
+    for (int b = 0; b < 8; ++b)
+      bits |= static_cast<std::uint64_t>(u8(data + static_cast<std::size_t>(k) * 8 + b)) << (8 * b);
+    double x;
+    std::memcpy(&x, &bits, sizeof x);
+    const long i = fortran ? k % rows : k / cols, j = fortran ? k / rows : k % cols;
+    if (!std::isfinite(x)) fail(fmt::format("entry ({}, {}) is {}: not finite", i, j, x));
+    m(i, j) = x;
+  }
+  return m;
+}
+
+}  // namespace
+
+Mat parse_matrix(const std::string& bytes, bool npy) {
+  return npy ? parse_npy(bytes) : parse_csv(bytes);
+}
+
+Mat read_matrix_file(const std::string& path) {
+  return parse_matrix(read_bytes(path), ends_with(path, ".npy"));
+}
+
+}  // namespace rubdyn

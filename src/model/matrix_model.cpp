@@ -1,0 +1,447 @@
+#include "rubdyn/model/matrix_model.hpp"
+
+#include <Eigen/Cholesky>
+#include <cmath>
+#include <limits>
+
+#include "rubdyn/core/demand.hpp"
+
+namespace rubdyn {
+
+std::vector<Coordinate> matrix_model_coordinates(int n, const std::vector<std::string>& names,
+                                                 const MatrixContactNode& node, bool rigid) {
+  using R = CoordinateRole;
+  std::vector<Coordinate> c;
+  for (int i = 0; i < n; ++i) {
+    std::string nm = "q";
+    if (static_cast<int>(names.size()) == n) {
+      nm = names[static_cast<std::size_t>(i)];
+    } else {
+      nm.append(std::to_string(i));
+    }
+    const bool x = i == node.x, y = i == node.y;
+    std::string rate = "v";  // (appended, not "v" + nm: g++ 12 warns falsely, -Wrestrict)
+    rate.append(nm);
+    c.push_back({nm, rate, rate, "m",
+                 x   ? "the contact node's centre (seal circle), horizontal"
+                 : y ? "the contact node's centre (seal circle), vertical"
+                     : "a coordinate of the user's rotor",
+                 x   ? R::RotorX
+                 : y ? R::RotorY
+                     : R::Other,
+                 0});
+  }
+  c.push_back(
+      {"theta", "omega", "omega0", "rad", "spin angle (its rate: the spin speed)", R::Spin, 0});
+  if (!rigid) {
+    c.push_back({"x_s", "vx_s", "vx_s", "m", "stator centre, horizontal", R::StatorX, 0});
+    c.push_back({"y_s", "vy_s", "vy_s", "m", "stator centre, vertical", R::StatorY, 0});
+  }
+  return c;
+}
+
+MatrixModel::MatrixModel(const MatrixParams& p)
+    : p_(p),
+      n_(p.rotor.size()),
+      N_(p.rotor.size() + (p.stator.rigid ? 1 : 3)),
+      th_(p.rotor.size()),
+      ix_(p.node.x),
+      iy_(p.node.y),
+      sprung_(!p.stator.rigid),
+      chart_(*this) {
+  const auto& r = p.rotor;
+  RUBDYN_DEMAND(n_ >= 2 && r.M.cols() == n_ && r.C.rows() == n_ && r.C.cols() == n_ &&
+                r.K.rows() == n_ && r.K.cols() == n_ && r.G.rows() == n_ && r.G.cols() == n_ &&
+                r.f0.size() == n_);
+  RUBDYN_DEMAND(ix_ >= 0 && ix_ < n_ && iy_ >= 0 && iy_ < n_ && ix_ != iy_);
+  // the energy V = 1/2 q^T K q and the Lagrangian's G need these exactly (io symmetrises)
+  RUBDYN_DEMAND(r.K == r.K.transpose() && r.G == -r.G.transpose());
+  if (sprung_) {
+    xs_ = n_ + 1;
+    ys_ = n_ + 2;
+  }
+  coords_ = matrix_model_coordinates(n_, r.names, p.node, p.stator.rigid);
+  Eigen::LLT<Mat> llt(r.M);
+  RUBDYN_DEMAND(llt.info() == Eigen::Success);
+  L_ = llt.matrixL();
+  MinvG_ = llt.solve(r.G);
+  mx_ = llt.solve(Vec::Unit(n_, ix_));
+  my_ = llt.solve(Vec::Unit(n_, iy_));
+  MinvG_.transposeInPlace();  // (row i of M^-1 G as a contiguous column)
+  Gt_ = r.G.transpose();
+  Ct_ = r.C.transpose();
+  Kt_ = r.K.transpose();
+  const int lo = std::min(ix_, iy_);
+  slot_ = lo;
+  for (int i = 0; i < n_; ++i)
+    if (i != ix_ && i != iy_) others_.push_back(i);
+}
+
+void MatrixModel::unbalance_terms(VecIn q, double& ubs, double& ubc) const {
+  const double ub = p_.loads.unbalance;
+  if (ub == 0.0) {
+    ubs = ubc = 0.0;
+    return;
+  }
+  const double psi = q[th_] + p_.loads.unbalance_phase;
+  ubs = ub * std::sin(psi);
+  ubc = ub * std::cos(psi);
+}
+
+double MatrixModel::b(int i, VecIn q, double ubs, double ubc) const {
+  double bi = 0.5 * Gt_.col(i).dot(q.head(n_));
+  if (i == ix_) bi -= ubs;
+  if (i == iy_) bi += ubc;
+  return bi;
+}
+
+double MatrixModel::u(int i, VecIn q, double ubs, double ubc) const {
+  // M^-1 b = 1/2 (M^-1 G) q + M^-1 (-u_b sin psi e_x + u_b cos psi e_y)
+  return 0.5 * MinvG_.col(i).dot(q.head(n_)) - ubs * mx_[i] + ubc * my_[i];
+}
+
+double MatrixModel::schur(VecIn q) const {
+  double ubs, ubc;
+  unbalance_terms(q, ubs, ubc);
+  double s = p_.rotor.Jp;
+  for (int i = 0; i < n_; ++i) s -= b(i, q, ubs, ubc) * u(i, q, ubs, ubc);
+  return s;
+}
+
+void MatrixModel::mass_matrix(VecIn q, MatOut M) const {
+  double ubs, ubc;
+  unbalance_terms(q, ubs, ubc);
+  M.setZero();
+  M.topLeftCorner(n_, n_) = p_.rotor.M;
+  for (int i = 0; i < n_; ++i) M(i, th_) = M(th_, i) = b(i, q, ubs, ubc);
+  M(th_, th_) = p_.rotor.Jp;
+  if (sprung_) M(xs_, xs_) = M(ys_, ys_) = p_.stator.mass;
+}
+
+void MatrixModel::mass_product(VecIn q, VecIn x, VecOut y) const {
+  double ubs, ubc;
+  unbalance_terms(q, ubs, ubc);
+  double yth = p_.rotor.Jp * x[th_];
+  for (int i = 0; i < n_; ++i) {
+    const double bi = b(i, q, ubs, ubc);
+    y[i] = p_.rotor.M.col(i).dot(x.head(n_)) + bi * x[th_];  // (M symmetric)
+    yth += bi * x[i];
+  }
+  y[th_] = yth;
+  if (sprung_) {
+    y[xs_] = p_.stator.mass * x[xs_];
+    y[ys_] = p_.stator.mass * x[ys_];
+  }
+}
+
+void MatrixModel::solve_mass(VecIn q, MatOut B) const {
+  // Schur complement on theta (header); u_i and b_i are recomputed where needed (n^2 flops
+  // each pass) rather than kept in a workspace: a model holds no mutable state.
+  double ubs, ubc;
+  unbalance_terms(q, ubs, ubc);
+  const double s = schur(q);
+  const bool ok = s > 0.0;  // (NaN: not ok)
+  const auto L = L_.triangularView<Eigen::Lower>();
+  for (Eigen::Index j = 0; j < B.cols(); ++j) {
+    auto r = B.col(j);
+    if (!ok) {  // M_full not positive definite here: no solution (the solvers end the run)
+      r.setConstant(std::numeric_limits<double>::quiet_NaN());
+      continue;
+    }
+    auto z = r.head(n_);
+    L.solveInPlace(z);
+    L.adjoint().solveInPlace(z);
+    double bz = 0.0;
+    for (int i = 0; i < n_; ++i) bz += b(i, q, ubs, ubc) * z[i];
+    const double th = (r[th_] - bz) / s;
+    for (int i = 0; i < n_; ++i) z[i] -= u(i, q, ubs, ubc) * th;
+    r[th_] = th;
+    if (sprung_) {
+      r[xs_] /= p_.stator.mass;
+      r[ys_] /= p_.stator.mass;
+    }
+  }
+}
+
+void MatrixModel::mass_matrix_product_jacobian(VecIn q, VecIn a, MatOut J) const {
+  // rows i < n: (M a)_i + b_i(q) a_theta; row theta: b(q) . a_q + Jp a_theta, with
+  // db/dq = G / 2 and db/dtheta = -u_b (cos psi e_x + sin psi e_y)
+  double ubs, ubc;
+  unbalance_terms(q, ubs, ubc);
+  J.setZero();
+  const double at = a[th_];
+  for (int k = 0; k < n_; ++k) {
+    for (int i = 0; i < n_; ++i) J(i, k) = 0.5 * p_.rotor.G(i, k) * at;
+    J(th_, k) = 0.5 * p_.rotor.G.col(k).dot(a.head(n_));  // 1/2 (G^T a)_k
+  }
+  J(ix_, th_) = -ubc * at;
+  J(iy_, th_) = -ubs * at;
+  J(th_, th_) = -ubc * a[ix_] - ubs * a[iy_];
+}
+
+void MatrixModel::smooth_forces(double /*t*/, VecIn q, VecIn v, VecOut f) const {
+  const auto& L = p_.loads;
+  const double om = v[th_];
+  for (int i = 0; i < n_; ++i)
+    f[i] = p_.rotor.f0[i] - Ct_.col(i).dot(v.head(n_)) - Kt_.col(i).dot(q.head(n_)) -
+           om * Gt_.col(i).dot(v.head(n_));
+  f[th_] = L.drive_torque(om);
+  if (L.unbalance != 0.0) {
+    double ubs, ubc;
+    unbalance_terms(q, ubs, ubc);
+    f[ix_] += om * om * ubc;  // the centrifugal force u_b Omega^2 e^{i psi}
+    f[iy_] += om * om * ubs;
+    f[th_] -= L.gravity * ubc;  // gravity's torque on the unbalance
+  }
+  if (sprung_) {
+    f[xs_] = -p_.stator.c * v[xs_] - p_.stator.k * q[xs_];
+    f[ys_] = -p_.stator.c * v[ys_] - p_.stator.k * q[ys_] - p_.stator.mass * L.gravity;
+  }
+}
+
+void MatrixModel::smooth_force_jacobians(double /*t*/, VecIn q, VecIn v, MatOut dfdq,
+                                         MatOut dfdv) const {
+  const auto& L = p_.loads;
+  const double om = v[th_];
+  dfdq.setZero();
+  dfdv.setZero();
+  dfdq.topLeftCorner(n_, n_) = -p_.rotor.K;
+  dfdv.topLeftCorner(n_, n_) = -p_.rotor.C - om * p_.rotor.G;
+  for (int i = 0; i < n_; ++i) dfdv(i, th_) = -Gt_.col(i).dot(v.head(n_));
+  dfdv(th_, th_) = L.drive_torque_slope();
+  if (L.unbalance != 0.0) {
+    double ubs, ubc;
+    unbalance_terms(q, ubs, ubc);
+    dfdq(ix_, th_) = -om * om * ubs;
+    dfdq(iy_, th_) = om * om * ubc;
+    dfdq(th_, th_) = L.gravity * ubs;
+    dfdv(ix_, th_) += 2.0 * om * ubc;
+    dfdv(iy_, th_) += 2.0 * om * ubs;
+  }
+  if (sprung_) {
+    dfdq(xs_, xs_) = dfdq(ys_, ys_) = -p_.stator.k;
+    dfdv(xs_, xs_) = dfdv(ys_, ys_) = -p_.stator.c;
+  }
+}
+
+void MatrixModel::compute_contact(int /*k*/, double /*t*/, VecIn q, VecIn v,
+                                  ContactKinematics& c) const {
+  // the Jeffcott rotor's kinematics with the disc centre at the node's (x, y)
+  double* wn = c.W_N.data();
+  double* wt = c.W_T.data();
+  for (int i = 0; i < N_; ++i) wn[i] = wt[i] = 0.0;
+  c.b_N = c.b_T = 0.0;
+  const double xs = sprung_ ? q[xs_] : 0.0, ys = sprung_ ? q[ys_] : 0.0;
+  const double vxs = sprung_ ? v[xs_] : 0.0, vys = sprung_ ? v[ys_] : 0.0;
+  const double sx = q[ix_] - xs, sy = q[iy_] - ys;
+  const double rho = std::sqrt(sx * sx + sy * sy);
+  c.d_N = p_.node.gap - rho;
+  if (rho == 0.0) {  // centred: no normal, and no contact possible (d_N = g0 > 0)
+    c.normal_defined = false;
+    c.v_N = c.v_t = c.wdot_N = c.wdot_T = 0.0;
+    return;
+  }
+  c.normal_defined = true;
+  const double R = p_.node.radius;
+  const double nx = sx / rho, ny = sy / rho, tx = ny, ty = -nx;
+  wn[ix_] = -nx;
+  wn[iy_] = -ny;
+  wt[ix_] = tx;
+  wt[iy_] = ty;
+  wt[th_] = -R;
+  if (sprung_) {
+    wn[xs_] = nx;
+    wn[ys_] = ny;
+    wt[xs_] = -tx;
+    wt[ys_] = -ty;
+  }
+  const double dvx = v[ix_] - vxs, dvy = v[iy_] - vys;
+  const double vn = nx * dvx + ny * dvy;
+  const double vt = tx * dvx + ty * dvy;
+  c.v_N = -vn;
+  c.v_t = vt - R * v[th_];
+  c.wdot_N = -vt * vt / rho;
+  c.wdot_T = vt * c.v_N / rho;
+}
+
+double MatrixModel::kinetic_energy(double /*t*/, VecIn q, VecIn v) const {
+  double ubs, ubc;
+  unbalance_terms(q, ubs, ubc);
+  const double om = v[th_];
+  double T = p_.rotor.Jp * om * om;
+  for (int i = 0; i < n_; ++i)
+    T += v[i] * (p_.rotor.M.col(i).dot(v.head(n_)) + 2.0 * om * b(i, q, ubs, ubc));
+  if (sprung_) T += p_.stator.mass * (v[xs_] * v[xs_] + v[ys_] * v[ys_]);
+  return 0.5 * T;
+}
+
+double MatrixModel::potential_energy(double /*t*/, VecIn q) const {
+  const auto& L = p_.loads;
+  double V = 0.0;
+  for (int i = 0; i < n_; ++i) V += q[i] * (0.5 * Kt_.col(i).dot(q.head(n_)) - p_.rotor.f0[i]);
+  if (L.unbalance != 0.0) V += L.gravity * L.unbalance * std::sin(q[th_] + L.unbalance_phase);
+  if (sprung_)
+    V += 0.5 * p_.stator.k * (q[xs_] * q[xs_] + q[ys_] * q[ys_]) +
+         L.gravity * p_.stator.mass * q[ys_];
+  return V;
+}
+
+SmoothPower MatrixModel::smooth_power(double /*t*/, VecIn /*q*/, VecIn v) const {
+  SmoothPower p;
+  p.external = p_.loads.drive_torque(v[th_]) * v[th_];
+  double d = 0.0;
+  for (int i = 0; i < n_; ++i) d -= v[i] * Ct_.col(i).dot(v.head(n_));
+  if (sprung_) d -= p_.stator.c * (v[xs_] * v[xs_] + v[ys_] * v[ys_]);
+  p.damping = d;
+  return p;
+}
+
+std::optional<LinearModel> MatrixModel::linearize(Linearization mode) const {
+  // the whirl labels of a Campbell diagram pair the coordinates (0, 1), (2, 3), ... as (x, y)
+  // of an isotropic rotor: only an even n has them
+  if (n_ % 2 != 0) return std::nullopt;
+  const bool tied = mode == Linearization::Tied;
+  if (tied && !sprung_) return std::nullopt;  // (the rigid ring pins the node)
+  const int m = n_ + (tied || !sprung_ ? 0 : 2);
+  LinearModel lm;
+  for (int i = 0; i < m; ++i)
+    lm.names.push_back(coords_[static_cast<std::size_t>(i < n_ ? i : i + 1)].name);
+  lm.M.setZero(m, m);
+  lm.G.setZero(m, m);
+  lm.D.setZero(m, m);
+  lm.K.setZero(m, m);
+  const auto& r = p_.rotor;
+  lm.M.topLeftCorner(n_, n_) = r.M;
+  lm.G.topLeftCorner(n_, n_) = r.G;
+  lm.D.topLeftCorner(n_, n_) = r.C;
+  lm.K.topLeftCorner(n_, n_) = r.K;
+  for (int k = 0; k < n_; k += 2) lm.nodes.push_back({k, k + 1});
+  const auto& s = p_.stator;
+  if (sprung_) {
+    const int a = tied ? ix_ : n_, b = tied ? iy_ : n_ + 1;
+    for (int i : {a, b}) {
+      lm.M(i, i) += s.mass;
+      lm.D(i, i) += s.c;
+      lm.K(i, i) += s.k;
+    }
+    if (!tied) lm.nodes.push_back({n_, n_ + 1});
+  }
+  return lm;
+}
+
+// ---- minimal coordinates of the contact phases ------------------------------------------------
+
+int MatrixModel::Chart::dim(ChartMode mode) const {
+  return (m_.n_ - 1) + (mode == ChartMode::Slip ? 1 : 0) + (m_.sprung_ ? 2 : 0);
+}
+
+void MatrixModel::Chart::chart(ChartMode mode, VecIn q, VecIn v, ChartAnchor& anchor, VecOut p,
+                               VecOut pd) const {
+  const MatrixModel& m = m_;
+  const double xs = m.sprung_ ? q[m.xs_] : 0.0, ys = m.sprung_ ? q[m.ys_] : 0.0;
+  const double vxs = m.sprung_ ? v[m.xs_] : 0.0, vys = m.sprung_ ? v[m.ys_] : 0.0;
+  const double phi = std::atan2(q[m.iy_] - ys, q[m.ix_] - xs);
+  anchor.fill(0.0);
+  const int nr = m.n_ - 1;
+  for (int k = 0; k < nr; ++k) {
+    if (k == m.slot_) continue;
+    const int i = m.others_[static_cast<std::size_t>(k < m.slot_ ? k : k - 1)];
+    p[k] = q[i];
+    pd[k] = v[i];
+  }
+  int k = nr;
+  if (mode == ChartMode::Slip) {
+    const double g0 = m.p_.node.gap;
+    p[m.slot_] = phi;
+    pd[m.slot_] = (-std::sin(phi) * (v[m.ix_] - vxs) + std::cos(phi) * (v[m.iy_] - vys)) / g0;
+    p[k] = q[m.th_];
+    pd[k++] = v[m.th_];
+  } else {
+    anchor[0] = phi;
+    anchor[1] = q[m.th_];
+    p[m.slot_] = 0.0;
+    pd[m.slot_] = v[m.th_];
+  }
+  if (m.sprung_) {
+    p[k] = xs;
+    pd[k++] = vxs;
+    p[k] = ys;
+    pd[k] = vys;
+  }
+}
+
+void MatrixModel::Chart::embed(ChartMode mode, const ChartAnchor& anchor, VecIn p, VecIn pd,
+                               VecOut q, VecOut v) const {
+  const MatrixModel& m = m_;
+  const double g0 = m.p_.node.gap;
+  const int nr = m.n_ - 1;
+  for (int k = 0; k < nr; ++k) {
+    if (k == m.slot_) continue;
+    const int i = m.others_[static_cast<std::size_t>(k < m.slot_ ? k : k - 1)];
+    q[i] = p[k];
+    v[i] = pd[k];
+  }
+  double phi, phid;
+  int k = nr;
+  if (mode == ChartMode::Slip) {
+    phi = p[m.slot_];
+    phid = pd[m.slot_];
+    q[m.th_] = p[k];
+    v[m.th_] = pd[k++];
+  } else {
+    const double ratio = m.p_.node.radius / g0;
+    phi = anchor[0] - ratio * p[m.slot_];
+    phid = -ratio * pd[m.slot_];
+    q[m.th_] = anchor[1] + p[m.slot_];
+    v[m.th_] = pd[m.slot_];
+  }
+  double xs = 0.0, ys = 0.0, vxs = 0.0, vys = 0.0;
+  if (m.sprung_) {
+    xs = q[m.xs_] = p[k];
+    ys = q[m.ys_] = p[k + 1];
+    vxs = v[m.xs_] = pd[k];
+    vys = v[m.ys_] = pd[k + 1];
+  }
+  const double c = std::cos(phi), s = std::sin(phi);
+  q[m.ix_] = xs + g0 * c;
+  q[m.iy_] = ys + g0 * s;
+  v[m.ix_] = vxs - g0 * phid * s;
+  v[m.iy_] = vys + g0 * phid * c;
+}
+
+void MatrixModel::Chart::reduce(ChartMode mode, const ChartAnchor& /*anchor*/, VecIn /*p*/,
+                                VecIn /*pd*/, VecIn q, VecIn a, VecOut pdd) const {
+  const MatrixModel& m = m_;
+  const double g0 = m.p_.node.gap;
+  const double xs = m.sprung_ ? q[m.xs_] : 0.0, ys = m.sprung_ ? q[m.ys_] : 0.0;
+  const double axs = m.sprung_ ? a[m.xs_] : 0.0, ays = m.sprung_ ? a[m.ys_] : 0.0;
+  const int nr = m.n_ - 1;
+  for (int k = 0; k < nr; ++k) {
+    if (k == m.slot_) continue;
+    pdd[k] = a[m.others_[static_cast<std::size_t>(k < m.slot_ ? k : k - 1)]];
+  }
+  int k = nr;
+  if (mode == ChartMode::Slip) {
+    // phi'' = t_phi . (a_r - a_s) / g0 (the curvature term is normal to t_phi)
+    const double tx = -(q[m.iy_] - ys) / g0, ty = (q[m.ix_] - xs) / g0;
+    pdd[m.slot_] = (tx * (a[m.ix_] - axs) + ty * (a[m.iy_] - ays)) / g0;
+    pdd[k++] = a[m.th_];
+  } else {
+    pdd[m.slot_] = a[m.th_];
+  }
+  if (m.sprung_) {
+    pdd[k++] = axs;
+    pdd[k] = ays;
+  }
+}
+
+ChartScales MatrixModel::Chart::scales(ChartMode mode) const {
+  // phi moves the contact point by g0 per radian; theta - theta0 in stick by R
+  ChartScales sc;
+  sc.length.assign(static_cast<std::size_t>(dim(mode)), 0.0);
+  sc.length[static_cast<std::size_t>(m_.slot_)] =
+      mode == ChartMode::Slip ? m_.p_.node.gap : m_.p_.node.radius;
+  return sc;
+}
+
+}  // namespace rubdyn
