@@ -6,43 +6,16 @@
 // extra time, must allocate the same number of times (test_no_allocation.cpp's method).
 #include <catch2/catch.hpp>
 
-#include "alloc/alloc_counter.hpp"
+#include "alloc/run_allocations.hpp"
 #include "rubdyn/hybrid/event_driven.hpp"
 #include "rubdyn/model/matrix_model.hpp"
 #include "rubdyn/stepping/fixed_step.hpp"
 
 using namespace rubdyn;
+using rubdyn::testing::NullSink;
+using rubdyn::testing::same_allocations;
 
 namespace {
-
-class NullSink final : public OutputSink {
- public:
-  void sample(const Sample&) override {}
-  void event(const EventRecord&) override {}
-  void end(const RunSummary&) override {}
-};
-
-template <class Run>
-std::pair<long, long> count(Run&& run) {
-  const long before = rubdyn::testing::allocations();
-  const RunSummary s = run();
-  REQUIRE(s.complete());
-  long events = 0;
-  for (long e : s.events) events += e;
-  return {rubdyn::testing::allocations() - before, events};
-}
-
-template <class Run>
-void same_allocations(Run&& run_to, double t1, double t2) {
-  count([&] { return run_to(t1); });
-  const auto a = count([&] { return run_to(t1); });
-  const auto b = count([&] { return run_to(t2); });
-  INFO("allocations " << a.first << " and " << b.first << ", events " << a.second << " and "
-                      << b.second);
-  REQUIRE(a.second == b.second);
-  REQUIRE(a.first > 0);
-  CHECK(a.first == b.first);
-}
 
 /// The paper's rotor (rotor_stator_model.hpp's formulas, the reference parameters) as matrices.
 MatrixParams paper_matrices(double g) {

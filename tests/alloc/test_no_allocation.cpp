@@ -8,7 +8,7 @@
 #include <catch2/catch.hpp>
 #include <cstddef>
 
-#include "alloc/alloc_counter.hpp"
+#include "alloc/run_allocations.hpp"
 #include "rubdyn/hybrid/event_driven.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/model_registry.hpp"
@@ -18,43 +18,10 @@
 #include "support/problems.hpp"
 
 using namespace rubdyn;
+using rubdyn::testing::NullSink;
+using rubdyn::testing::same_allocations;
 
 namespace {
-
-/// Discards the output: what is counted is the solver's own allocations.
-class NullSink final : public OutputSink {
- public:
-  void sample(const Sample&) override {}
-  void event(const EventRecord&) override {}
-  void end(const RunSummary&) override {}
-};
-
-/// Heap allocations of one whole run (set-up included), and the run's event count.
-template <class Run>
-std::pair<long, long> count(Run&& run) {
-  const long before = rubdyn::testing::allocations();
-  const RunSummary s = run();
-  REQUIRE(s.complete());
-  long events = 0;
-  for (long e : s.events) events += e;
-  return {rubdyn::testing::allocations() - before, events};
-}
-
-/// The same scene run to t1 and to t2 > t1 allocates the same: nothing per step, sample or root
-/// that is no event.
-template <class Run>
-void same_allocations(Run&& run_to, double t1, double t2) {
-  // a first run, not counted: what is set up once per thread (the prescribed-speed wrapper's
-  // thread_local workspace) or per process is not what is compared
-  count([&] { return run_to(t1); });
-  const auto a = count([&] { return run_to(t1); });
-  const auto b = count([&] { return run_to(t2); });
-  INFO("allocations " << a.first << " and " << b.first << ", events " << a.second << " and "
-                      << b.second);
-  REQUIRE(a.second == b.second);  // no event in the extra time (an event may allocate its note)
-  REQUIRE(a.first > 0);           // the counter counts (the set-up allocates)
-  CHECK(a.first == b.first);
-}
 
 const FixedStepScheme kSchemes[] = {FixedStepScheme::CarpOneVC, FixedStepScheme::CarpQN,
                                     FixedStepScheme::MoreauJean,
