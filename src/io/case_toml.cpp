@@ -1,17 +1,12 @@
 // Case files: TOML -> CaseSpec with complete validation, and CaseSpec -> TOML.
 // The only file of the project that includes the TOML parser.
-#include <fcntl.h>
 #include <fmt/format.h>
-#include <sys/stat.h>
 #include <toml++/toml.h>
-#include <unistd.h>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -1190,42 +1185,13 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
   auto refuse = [&path](const std::string& why) {
     throw CaseError({{path, 0, "(file)", "", why}});
   };
-  // Opened without waiting (O_NONBLOCK: a FIFO without a writer would block the open) and
-  // asked what it is before a byte is read: only a regular file is a case file (a FIFO or a
-  // device may never end, or never begin).
-  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
-  if (fd < 0) refuse(std::string("cannot read the case file: ") + std::strerror(errno));
-  struct stat st {};
-  if (::fstat(fd, &st) != 0) {
-    const int err = errno;
-    ::close(fd);
-    refuse(std::string("cannot read the case file: ") + std::strerror(err));
+  // only a regular file of at most kMaxCaseBytes is a case file (text_files.hpp)
+  std::string text;
+  try {
+    text = read_input_file(path, kMaxCaseBytes, "case");
+  } catch (const InputRefused& e) {
+    refuse(e.what());
   }
-  if (!S_ISREG(st.st_mode)) {
-    ::close(fd);
-    refuse(S_ISDIR(st.st_mode)    ? "is a directory, not a case file"
-           : S_ISFIFO(st.st_mode) ? "is a FIFO (named pipe), not a regular file: not read"
-           : S_ISSOCK(st.st_mode) ? "is a socket, not a regular file: not read"
-                                  : "is a device, not a regular file: not read");
-  }
-  // a regular file may still grow while read: read at most kMaxCaseBytes + 1
-  std::string text(kMaxCaseBytes + 1, '\0');
-  std::size_t got = 0;
-  while (got < text.size()) {
-    const ssize_t n = ::read(fd, text.data() + got, text.size() - got);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) {
-      const int err = errno;
-      ::close(fd);
-      refuse(std::string("cannot read the case file: ") + std::strerror(err));
-    }
-    if (n == 0) break;
-    got += static_cast<std::size_t>(n);
-  }
-  ::close(fd);
-  text.resize(got);
-  if (text.size() > kMaxCaseBytes)
-    refuse(fmt::format("a file larger than {} bytes: not a case file", kMaxCaseBytes));
   if (text.find('\0') != std::string::npos) refuse("holds NUL bytes: not a text (TOML) file");
   return parse_case(text, path, overrides);
 }

@@ -1,17 +1,14 @@
 // Matrix files (CSV, NumPy .npy) of a user's linear rotor: io/matrix_files.hpp.
 #include "rubdyn/io/matrix_files.hpp"
 
-#include <fcntl.h>
 #include <fmt/format.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <vector>
+
+#include "rubdyn/io/text_files.hpp"
 
 namespace rubdyn {
 
@@ -26,33 +23,11 @@ bool ends_with(const std::string& s, const std::string& tail) {
 }
 
 std::string read_bytes(const std::string& path) {
-  // as load_case: opened without waiting, only a regular file read, at most the limit + 1
-  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
-  if (fd < 0) fail(std::string("cannot read the file: ") + std::strerror(errno));
-  struct stat st {};
-  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-    const bool dir = S_ISDIR(st.st_mode);
-    ::close(fd);
-    fail(dir ? "is a directory, not a matrix file" : "is not a regular file: not read");
+  try {
+    return read_input_file(path, kMaxMatrixFileBytes, "matrix");
+  } catch (const InputRefused& e) {
+    fail(e.what());
   }
-  std::string text(kMaxMatrixFileBytes + 1, '\0');
-  std::size_t got = 0;
-  while (got < text.size()) {
-    const ssize_t n = ::read(fd, text.data() + got, text.size() - got);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) {
-      const int err = errno;
-      ::close(fd);
-      fail(std::string("cannot read the file: ") + std::strerror(err));
-    }
-    if (n == 0) break;
-    got += static_cast<std::size_t>(n);
-  }
-  ::close(fd);
-  text.resize(got);
-  if (text.size() > kMaxMatrixFileBytes)
-    fail(fmt::format("a file larger than {} bytes: not read", kMaxMatrixFileBytes));
-  return text;
 }
 
 std::string_view trim(std::string_view s) {

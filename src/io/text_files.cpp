@@ -40,6 +40,46 @@ std::vector<std::string> split_csv_line(const std::string& line) {
   return out;
 }
 
+std::string read_input_file(const std::string& path, std::size_t max_bytes, std::string_view role) {
+  auto refuse = [](const std::string& why) { throw InputRefused(why); };
+  auto cannot = [&](int err) {
+    return fmt::format("cannot read the {} file: {}", role, std::strerror(err));
+  };
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
+  if (fd < 0) refuse(cannot(errno));
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) {
+    const int err = errno;
+    ::close(fd);
+    refuse(cannot(err));
+  }
+  if (!S_ISREG(st.st_mode)) {
+    ::close(fd);
+    refuse(S_ISDIR(st.st_mode)    ? fmt::format("is a directory, not a {} file", role)
+           : S_ISFIFO(st.st_mode) ? "is a FIFO (named pipe), not a regular file: not read"
+           : S_ISSOCK(st.st_mode) ? "is a socket, not a regular file: not read"
+                                  : "is a device, not a regular file: not read");
+  }
+  std::string text(max_bytes + 1, '\0');
+  std::size_t got = 0;
+  while (got < text.size()) {
+    const ssize_t n = ::read(fd, text.data() + got, text.size() - got);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      const int err = errno;
+      ::close(fd);
+      refuse(cannot(err));
+    }
+    if (n == 0) break;
+    got += static_cast<std::size_t>(n);
+  }
+  ::close(fd);
+  text.resize(got);
+  if (text.size() > max_bytes)
+    refuse(fmt::format("a file larger than {} bytes: not a {} file", max_bytes, role));
+  return text;
+}
+
 std::string quoted_string(std::string_view text) {
   std::string out = "\"";
   for (const char ch : text) {

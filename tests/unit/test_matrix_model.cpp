@@ -145,7 +145,7 @@ TEST_CASE("Matrix files: a bad file is refused with what is wrong in it", "[matr
     }
   }
   CHECK_THROWS_WITH(read_matrix_file("/nonexistent/M.csv"),
-                    Catch::Contains("cannot read the file: No such file"));
+                    Catch::Contains("cannot read the matrix file: No such file"));
 }
 
 TEST_CASE("Case files of kind matrices: each bad matrix is named with its key, file and line",

@@ -23,6 +23,22 @@ std::vector<std::string> split_csv_line(const std::string& line);
 /// character (and DEL) as a \u00XX escape, any other byte as is.
 std::string quoted_string(std::string_view text);
 
+/// An input file that rubdyn refuses to read, with the reason (the caller names the file and
+/// turns it into its own error: a case error, a matrix-file error).
+class InputRefused : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Reads a whole input file (a case, a matrix) of at most max_bytes. It is opened without
+/// waiting (O_NONBLOCK: a FIFO without a writer would block the open) and asked what it is
+/// before a byte is read: only a regular file is read (a FIFO or a device may never end, or
+/// never begin); a regular file may still grow while read, so at most max_bytes + 1 bytes are
+/// read. Throws InputRefused with the reason, which names the file's `role` ("case",
+/// "matrix"): cannot be opened or read, a directory, a FIFO, a socket, a device, larger than
+/// max_bytes.
+std::string read_input_file(const std::string& path, std::size_t max_bytes, std::string_view role);
+
 /// rubdyn ends every row it writes with a line end: a last row without one was cut by a kill
 /// (or a full disk) and may hold a truncated number. Readers drop it with this warning.
 std::string cut_row_warning(const std::string& file, long line);
