@@ -98,16 +98,29 @@ std::pair<double, double> window_of(const RunRecord& r, const AnalysisOptions& o
   return {t0, t1};
 }
 
-// z = x_r + i y_r and omega on a uniform grid of spacing dt over [t0, t1].
+// The plane must be one of the model's contacts, and the model must locate its centres.
+void check_plane(const LagrangianModel& m, int plane) {
+  if (plane < 0 || plane >= m.contact_count())
+    throw std::invalid_argument(fmt::format("plane {}: the model '{}' has {} contact plane(s)",
+                                            plane + 1, m.name(), m.contact_count()));
+  PlaneMotion pm;
+  const Vec z = Vec::Zero(m.num_dofs());
+  if (!m.plane_motion(plane, 0.0, z, z, pm))
+    throw std::invalid_argument(
+        fmt::format("plane {}: the model '{}' does not locate its centres", plane + 1, m.name()));
+}
+
+// z = x_r + i y_r (the rotor's point in the plane) and omega on a uniform grid of spacing dt over
+// [t0, t1].
 struct Uniform {
   double t0 = 0, dt = 0;
   std::vector<std::complex<double>> z;
   std::vector<std::complex<double>> vz;  ///< dz/dt: a state, exact at the samples (no aliasing)
   std::vector<double> omega;
 };
-Uniform resample(const RunRecord& r, double t0, double t1) {
+Uniform resample(const RunRecord& r, double t0, double t1, int plane) {
   const std::unique_ptr<LagrangianModel> model = build_model(r.spec);
-  const PlaneCoordinates pc = plane_coordinates(model->coordinates(), 0);
+  check_plane(*model, plane);
   const auto& s = r.samples;
   std::map<long long, long> count;  // spacing histogram in units of 1e-12 s
   for (size_t i = 0; i + 1 < s.size(); ++i) {
@@ -125,16 +138,19 @@ Uniform resample(const RunRecord& r, double t0, double t1) {
   u.vz.resize(n);
   u.omega.resize(n);
   size_t j = 0;
+  PlaneMotion pa, pb;
   for (long k = 0; k < n; ++k) {
     const double t = t0 + static_cast<double>(k) * u.dt;
     while (j + 2 < s.size() && s[j + 1].t <= t) ++j;
     const Sample& a = s[j];
     const Sample& b = s[std::min(j + 1, s.size() - 1)];
     const double w = b.t > a.t ? std::clamp((t - a.t) / (b.t - a.t), 0.0, 1.0) : 0.0;
-    u.z[k] = {a.q[pc.rotor_x] + w * (b.q[pc.rotor_x] - a.q[pc.rotor_x]),
-              a.q[pc.rotor_y] + w * (b.q[pc.rotor_y] - a.q[pc.rotor_y])};
-    u.vz[k] = {a.v[pc.rotor_x] + w * (b.v[pc.rotor_x] - a.v[pc.rotor_x]),
-               a.v[pc.rotor_y] + w * (b.v[pc.rotor_y] - a.v[pc.rotor_y])};
+    model->plane_motion(plane, a.t, a.q, a.v, pa);
+    model->plane_motion(plane, b.t, b.q, b.v, pb);
+    u.z[k] = {pa.rotor.x() + w * (pb.rotor.x() - pa.rotor.x()),
+              pa.rotor.y() + w * (pb.rotor.y() - pa.rotor.y())};
+    u.vz[k] = {pa.rotor_rate.x() + w * (pb.rotor_rate.x() - pa.rotor_rate.x()),
+               pa.rotor_rate.y() + w * (pb.rotor_rate.y() - pa.rotor_rate.y())};
     const double wa = model->spin(a.t, a.q, a.v), wb = model->spin(b.t, b.q, b.v);
     u.omega[k] = wa + w * (wb - wa);
   }
@@ -215,23 +231,23 @@ std::string_view to_string(Regime r) {
   return "?";
 }
 
-std::vector<DerivedSample> derive(const RunRecord& r) {
+std::vector<DerivedSample> derive(const RunRecord& r, int plane) {
   // the model says where the contact plane's centres are and which coordinate spins
   const std::unique_ptr<LagrangianModel> model = build_model(r.spec);
-  const PlaneCoordinates pc = plane_coordinates(model->coordinates(), 0);
-  const double g0 = model->gap_scale(0), R = model->contact_radius(0), tau = nominal_torque(r.spec);
-  // a stator without coordinates is fixed at the origin
-  auto at = [](const Vec& x, int i) { return i >= 0 ? x[i] : 0.0; };
+  check_plane(*model, plane);
+  const double g0 = model->gap_scale(plane), R = model->contact_radius(plane),
+               tau = nominal_torque(r.spec);
   std::vector<DerivedSample> out;
   out.reserve(r.samples.size());
+  PlaneMotion pm;
   for (const Sample& s : r.samples) {
     DerivedSample d;
     d.t = s.t;
     d.omega = model->spin(s.t, s.q, s.v);
-    const double sx = s.q[pc.rotor_x] - at(s.q, pc.stator_x),
-                 sy = s.q[pc.rotor_y] - at(s.q, pc.stator_y);
-    const double vx = s.v[pc.rotor_x] - at(s.v, pc.stator_x),
-                 vy = s.v[pc.rotor_y] - at(s.v, pc.stator_y);
+    model->plane_motion(plane, s.t, s.q, s.v, pm);
+    const double sx = pm.rotor.x() - pm.stator.x(), sy = pm.rotor.y() - pm.stator.y();
+    const double vx = pm.rotor_rate.x() - pm.stator_rate.x(),
+                 vy = pm.rotor_rate.y() - pm.stator_rate.y();
     const double rho2 = sx * sx + sy * sy;
     if (rho2 > 1e-6 * g0 * g0) {
       d.precession = (sx * vy - sy * vx) / rho2;
@@ -241,7 +257,7 @@ std::vector<DerivedSample> derive(const RunRecord& r) {
     } else {
       d.precession = d.precession_ratio = kNaN;
     }
-    const ContactSample& c = s.contacts.front();
+    const ContactSample& c = s.contacts[static_cast<std::size_t>(plane)];
     d.regime = c.phase == Phase::Free    ? Regime::Free
                : c.phase == Phase::Stick ? Regime::Rolling
                                          : Regime::Sliding;
@@ -327,7 +343,7 @@ RunVerdicts verdicts(const RunRecord& r, std::vector<DerivedSample>& d, const An
 
 Spectrum full_spectrum(const RunRecord& r, const AnalysisOptions& o) {
   const auto [t0, t1] = window_of(r, o);
-  const Uniform u = resample(r, t0, t1);
+  const Uniform u = resample(r, t0, t1, o.plane);
   if (u.z.size() < 8) throw std::invalid_argument("fewer than 8 samples for the spectrum");
   Spectrum s;
   windowed_fft(u.z, 0, static_cast<long>(u.z.size()), 1, u.dt, o.f_max, s.f, s.amplitude);
@@ -339,7 +355,7 @@ Spectrogram spectrogram(const RunRecord& r, const AnalysisOptions& o) {
     throw std::invalid_argument(fmt::format("overlap {} is outside [0, 1)", o.overlap));
   if (o.pad < 1) throw std::invalid_argument(fmt::format("pad {} is below 1", o.pad));
   const auto [t0, t1] = window_of(r, o);
-  const Uniform u = resample(r, t0, t1);
+  const Uniform u = resample(r, t0, t1, o.plane);
   const long n = static_cast<long>(u.z.size());
   const long len = std::lround(o.window / u.dt);
   if (len < 8 || len > n) {
@@ -436,36 +452,50 @@ std::vector<std::string> analysis_option_problems(const AnalysisOptions& o) {
   return bad;
 }
 
-RunVerdicts write_analysis(const RunRecord& r, const AnalysisOptions& o,
-                           const std::string& out_dir) {
-  namespace fs = std::filesystem;
-  // compute everything first: a bad option fails before any file is written
-  auto d = derive(r);
-  const RunVerdicts v = verdicts(r, d, o);
+namespace {
+
+/// One plane's analysis, computed before anything is written.
+struct PlaneAnalysis {
+  std::vector<DerivedSample> d;
+  RunVerdicts v;
+  Spectrum sp;
+  std::string sp_note;  ///< why there is no spectrum (empty: there is one)
+  Spectrogram sg;
+  std::string sg_note;
+};
+
+PlaneAnalysis analyse_plane(const RunRecord& r, AnalysisOptions o, int plane) {
+  o.plane = plane;
+  PlaneAnalysis a;
+  a.d = derive(r, plane);
+  a.v = verdicts(r, a.d, o);
   // a run with too few samples for a spectrum (a huge output.dt: the initial and final states
   // only) has none, and a run shorter than one spectrogram frame no spectrogram (a short sweep
   // point, say): the other results stand, and analysis.json says why each is absent (the
   // window and the options were checked by verdicts() above)
-  std::string sp_note;
-  Spectrum sp;
   try {
-    sp = full_spectrum(r, o);
+    a.sp = full_spectrum(r, o);
   } catch (const std::invalid_argument& e) {
-    sp_note = e.what();
+    a.sp_note = e.what();
   }
-  std::string sg_note;
-  Spectrogram sg;
   try {
-    sg = spectrogram(r, o);
+    a.sg = spectrogram(r, o);
   } catch (const std::invalid_argument& e) {
     if (o.overlap < 0.0 || o.overlap >= 1.0 || o.pad < 1) throw;  // a bad option is an error
-    sg_note = e.what();
+    a.sg_note = e.what();
   }
-  const std::string dir = out_dir.empty() ? (fs::path(r.dir) / "analysis").string() : out_dir;
+  return a;
+}
+
+/// derived.csv, spectrum.csv, spectrogram.csv and campbell.csv of one plane into dir.
+void write_plane_files(const PlaneAnalysis& a, const std::string& dir) {
+  namespace fs = std::filesystem;
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) throw std::runtime_error("cannot create " + dir + ": " + ec.message());
-
+  const auto& d = a.d;
+  const auto& sp = a.sp;
+  const auto& sg = a.sg;
   fmt::memory_buffer b;
   auto out = std::back_inserter(b);
   fmt::format_to(out,
@@ -498,15 +528,20 @@ RunVerdicts write_analysis(const RunRecord& r, const AnalysisOptions& o,
     fmt::format_to(out, "\n");
   }
   write_file_atomic((fs::path(dir) / "campbell.csv").string(), fmt::to_string(b));
-  std::string json = verdicts_json(v);
+}
+
+/// One plane's verdicts with its spectra's notes, as the JSON object of analysis.json.
+std::string plane_json(const PlaneAnalysis& a) {
+  const auto& sg = a.sg;
+  std::string json = verdicts_json(a.v);
   // (the notes quote paths: escaped as JSON strings)
   json.insert(json.size() - 3,
               fmt::format(",\n  \"spectrum\": {}",
-                          quoted_string(sp_note.empty() ? "written" : "skipped: " + sp_note)));
+                          quoted_string(a.sp_note.empty() ? "written" : "skipped: " + a.sp_note)));
   json.insert(json.size() - 3,
               fmt::format(",\n  \"spectrogram\": {}",
-                          quoted_string(sg_note.empty() ? "written" : "skipped: " + sg_note)));
-  if (sg_note.empty()) {
+                          quoted_string(a.sg_note.empty() ? "written" : "skipped: " + a.sg_note)));
+  if (a.sg_note.empty()) {
     // the frames whose samples alias the orbit's whirl (campbell.csv: f_whirl, undersampled)
     long bad = 0;
     for (const char u : sg.undersampled) bad += u ? 1 : 0;
@@ -524,8 +559,62 @@ RunVerdicts write_analysis(const RunRecord& r, const AnalysisOptions& o,
                             "\"spectrogram_undersampled_spans\": [{}]",
                             num_json(sg.f_nyquist), sg.t.size(), bad, spans));
   }
+  return json;
+}
+
+}  // namespace
+
+RunVerdicts write_analysis(const RunRecord& r, const AnalysisOptions& o,
+                           const std::string& out_dir) {
+  namespace fs = std::filesystem;
+  // compute everything first: a bad option fails before any file is written
+  const int planes = build_model(r.spec)->contact_count();
+  std::vector<PlaneAnalysis> all;
+  for (int k = 0; k < planes; ++k) all.push_back(analyse_plane(r, o, k));
+  const std::string dir = out_dir.empty() ? (fs::path(r.dir) / "analysis").string() : out_dir;
+  // plane 1 in the folder itself (a one-plane run's files as they have always been), plane k in
+  // plane_k/
+  for (int k = 0; k < planes; ++k)
+    write_plane_files(all[static_cast<std::size_t>(k)],
+                      k == 0 ? dir : (fs::path(dir) / fmt::format("plane_{}", k + 1)).string());
+  std::string json = plane_json(all.front());
+  if (planes > 1) {
+    // every plane's own verdicts, and the friction torque of all planes together (what brakes
+    // the spin): the sum of R_k F_T,k / tau_a over the planes, sample by sample
+    std::string arr;
+    for (int k = 0; k < planes; ++k) {
+      std::string pj = plane_json(all[static_cast<std::size_t>(k)]);
+      pj.insert(2, fmt::format("  \"plane\": {},\n", k + 1));
+      // indent the object by two spaces inside the array
+      std::string ind;
+      for (char c : pj) {
+        ind += c;
+        if (c == '\n') ind += "  ";
+      }
+      while (!ind.empty() && (ind.back() == ' ' || ind.back() == '\n')) ind.pop_back();
+      arr += fmt::format("{}  {}", arr.empty() ? "" : ",\n", ind);
+    }
+    const auto& d0 = all.front().d;
+    double peak = 0.0, integral = 0.0;
+    const double t0 = all.front().v.t0, t1 = all.front().v.t1;
+    for (std::size_t i = 0; i < d0.size(); ++i) {
+      if (d0[i].t < t0 || d0[i].t > t1) continue;
+      double sum = 0.0;
+      for (const auto& a : all) sum += a.d[i].friction_torque_ratio;
+      if (!std::isfinite(sum)) continue;
+      peak = std::max(peak, sum);
+      if (i + 1 < d0.size()) {
+        const double b = std::min(d0[i + 1].t, t1);
+        if (b > d0[i].t) integral += sum * (b - d0[i].t);
+      }
+    }
+    json.insert(json.size() - 3,
+                fmt::format(",\n  \"planes\": [\n{}\n  ],\n  \"max_total_friction_torque_ratio\": "
+                            "{},\n  \"mean_total_friction_torque_ratio\": {}",
+                            arr, num_json(peak), num_json(integral / (t1 - t0))));
+  }
   write_file_atomic((fs::path(dir) / "analysis.json").string(), json);
-  return v;
+  return all.front().v;
 }
 
 }  // namespace rubdyn

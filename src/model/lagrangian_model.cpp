@@ -32,6 +32,17 @@ double LagrangianModel::kinetic_energy(double /*t*/, VecIn q, VecIn v) const {
   return 0.5 * v.dot(M * v);
 }
 
+bool LagrangianModel::plane_motion(int k, double /*t*/, VecIn q, VecIn v, PlaneMotion& out) const {
+  const PlaneCoordinates pc = plane_coordinates(coordinates(), k);
+  if (pc.rotor_x < 0 || pc.rotor_y < 0) return false;
+  auto at = [](VecIn x, int i) { return i >= 0 ? x[i] : 0.0; };
+  out.rotor = {q[pc.rotor_x], q[pc.rotor_y]};
+  out.rotor_rate = {v[pc.rotor_x], v[pc.rotor_y]};
+  out.stator = {at(q, pc.stator_x), at(q, pc.stator_y)};
+  out.stator_rate = {at(v, pc.stator_x), at(v, pc.stator_y)};
+  return true;
+}
+
 std::optional<Penetration> LagrangianModel::initial_penetration(VecIn q, double roundoff) const {
   const Vec v = Vec::Zero(num_dofs());
   ContactKinematics c(num_dofs());

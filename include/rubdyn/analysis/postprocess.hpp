@@ -3,7 +3,9 @@
 // only the folder: timeseries.csv for the motion and case.resolved.toml for the parameters.
 //
 // Definitions (per output sample; Y up, spin theta' > 0 counterclockwise about +Z):
-//   s = r_r - r_s                   rotor centre relative to the stator centre (R plane)
+//   s = r_r - r_s                   rotor centre relative to the stator centre in the contact
+//                                   plane analysed (LagrangianModel::plane_motion; R for the
+//                                   paper's rotor; with several planes, each plane in turn)
 //   precession  Omega_p = (s_x s_y' - s_y s_x') / |s|^2  [rad/s]: the angular speed of the rotor
 //               orbit relative to the stator, positive in the spin direction (counterclockwise);
 //               undefined (NaN) while |s| < 1e-3 g0 (centred rotor: no orbit angle)
@@ -13,7 +15,8 @@
 //   dry whip    backward whirl while sliding; dry whirl: backward whirl while rolling (rolling
 //               without slip whirls at -R_r omega / g0: 250 x the spin, backward, for the
 //               reference case)
-//   friction torque ratio  R_r F_T / tau_a: the friction torque about the shaft, positive when it
+//   friction torque ratio  R_r F_T / tau_a (the plane's R_r and F_T): the friction torque about the
+//   shaft, positive when it
 //               brakes a positive spin (the generalised force on theta is -R_r F_T), over the
 //               driving torque
 //   d_N / g0    normalised gap
@@ -80,6 +83,7 @@ struct AnalysisOptions {
   int pad = 4;                   ///< zero-padding factor of each frame (>= 1)
   double f_max = 2000.0;         ///< frequencies kept in the spectra: |f| <= f_max [Hz]
   std::optional<double> t0, t1;  ///< analysis window (default: the whole run)
+  int plane = 0;  ///< the contact plane analysed (0-based contact index; spectra, spectrogram)
 };
 
 /// Every rule `o` breaks, one message each naming the option (empty: valid): min_turns > 0,
@@ -136,7 +140,9 @@ struct Spectrogram {
 /// its fastest component).
 inline constexpr double kUndersampledFraction = 0.5;
 
-std::vector<DerivedSample> derive(const RunRecord& r);
+/// The derived samples of contact plane `plane` (0-based). Throws std::invalid_argument when the
+/// model has no such plane or cannot locate its centres (LagrangianModel::plane_motion).
+std::vector<DerivedSample> derive(const RunRecord& r, int plane = 0);
 /// Also marks d[i].sustained. verdicts, full_spectrum and spectrogram throw
 /// std::invalid_argument for a run without samples, a sample time that is not finite, times
 /// that decrease, or a window that does not overlap the run.
@@ -150,7 +156,13 @@ Spectrogram spectrogram(const RunRecord& r, const AnalysisOptions& o = {});
 
 /// Writes dir/analysis/{derived.csv, spectrum.csv, spectrogram.csv, campbell.csv,
 /// analysis.json} (or into out_dir); each file written to a temporary name and renamed, so a
-/// failure leaves no half-written file. Returns the verdicts.
+/// failure leaves no half-written file. Returns the verdicts. A model with several contact
+/// planes: those files are plane 1's, and plane k's derived, spectrum, spectrogram and campbell
+/// files are in the subfolder plane_k/ (k = 2..K); analysis.json keeps plane 1's verdicts at
+/// its top level (as for one plane) and adds "planes" (each plane's verdicts with its number)
+/// and the friction torque of all planes together, max_total_friction_torque_ratio and
+/// mean_total_friction_torque_ratio (sum over the planes of R_k F_T,k / tau_a). The analysis
+/// options' `plane` is ignored here: every plane is written.
 RunVerdicts write_analysis(const RunRecord& r, const AnalysisOptions& o,
                            const std::string& out_dir = "");
 std::string verdicts_json(const RunVerdicts& v);

@@ -73,6 +73,14 @@ struct Observable {
   std::string name, unit, meaning;
 };
 
+/// The two centres of a contact's plane at one state: the rotor's point and the stator ring's
+/// centre, with their velocities (LagrangianModel::plane_motion). What the analysis reads a
+/// plane's orbit, precession and whirl from.
+struct PlaneMotion {
+  Vec2 rotor = Vec2::Zero(), rotor_rate = Vec2::Zero();
+  Vec2 stator = Vec2::Zero(), stator_rate = Vec2::Zero();
+};
+
 /// A contact that the initial state penetrates (initial_penetration).
 struct Penetration {
   int contact = 0;
@@ -128,6 +136,11 @@ class LagrangianModel {
   /// The lever arm of contact k's friction force about the spin axis: the rotor's seal radius
   /// R (the spin entry of W_T is -R) [m]; 0 for a model without a spin.
   virtual double contact_radius(int /*k*/ = 0) const { return 0.0; }
+  /// The centres of contact k's plane at (t, q, v) into `out`; false when the model cannot say
+  /// (no rotor coordinates for that plane). The default reads the coordinates' roles
+  /// (plane_coordinates(coordinates(), k); a stator without coordinates is fixed at the origin);
+  /// a model whose rotor point in a plane is a combination of coordinates overrides it.
+  virtual bool plane_motion(int k, double t, VecIn q, VecIn v, PlaneMotion& out) const;
   /// Minimal coordinates of the contact phases, or nullptr when the model has none (the
   /// event-driven integrator then integrates contact phases as a DAE with projection).
   virtual const ContactChart* contact_chart() const { return nullptr; }
