@@ -2,6 +2,7 @@
 // issue), one run into a MemorySink (GIL released), the summary and comparison as the C++ JSON
 // writers produce them, the Campbell diagram and the model's mechanics for a user's own scheme.
 // The Python package (python/rubdyn/) builds its results and plots on top of this.
+#include <fmt/format.h>
 #include <pybind11/eigen.h>
 #include <pybind11/functional.h>
 #include <pybind11/numpy.h>
@@ -266,17 +267,9 @@ py::dict campbell_dict(const CampbellDiagram& d) {
   return r;
 }
 
-/// `rubdyn analyze` on samples held in memory (columns named as in timeseries.csv, phase as
-/// codes): the verdicts as analysis.json writes them, and derived.csv's columns.
-py::tuple analyze_columns(const Case& c, const py::dict& columns, long events, double min_turns,
-                          std::optional<double> t0, std::optional<double> t1,
-                          const std::string& source) {
-  AnalysisOptions o;
-  o.min_turns = min_turns;
-  o.t0 = t0;
-  o.t1 = t1;
-  const auto bad = analysis_option_problems(o);
-  if (!bad.empty()) throw py::value_error(bad.front());
+/// Samples held in memory (columns named as in timeseries.csv, phase as codes) as a RunRecord
+/// of the case's model.
+RunRecord record_of_columns(const Case& c, const py::dict& columns, const std::string& source) {
   auto col = [&](const char* name) {
     if (!columns.contains(name)) throw py::value_error(std::string("no column ") + name);
     return columns[name].cast<py::array_t<double, py::array::forcecast>>();
@@ -286,7 +279,6 @@ py::tuple analyze_columns(const Case& c, const py::dict& columns, long events, d
   RunRecord r;
   r.dir = source;  // names the samples in messages
   r.spec = c.spec;
-  r.events = events;
   const std::unique_ptr<LagrangianModel> model = build_model(c.spec);
   r.samples.assign(n, Sample(model->num_dofs(), model->contact_count(),
                              static_cast<int>(model->observables().size())));
@@ -301,7 +293,56 @@ py::tuple analyze_columns(const Case& c, const py::dict& columns, long events, d
       throw py::value_error(e.what());
     }
   }
-  std::vector<DerivedSample> d = derive(r);
+  return r;
+}
+
+/// The centres of contact plane `plane` (1-based) at every sample (LagrangianModel::
+/// plane_motion): the rotor's point x_r, y_r and the ring's centre x_s, y_s, with their rates.
+py::dict plane_columns(const Case& c, const py::dict& columns, int plane) {
+  const RunRecord r = record_of_columns(c, columns, "result");
+  const std::unique_ptr<LagrangianModel> model = build_model(c.spec);
+  if (plane < 1 || plane > model->contact_count())
+    throw py::value_error(fmt::format("plane {}: the model '{}' has {} contact plane(s)", plane,
+                                      model->name(), model->contact_count()));
+  const std::size_t n = r.samples.size();
+  std::vector<std::vector<double>> cols(8, std::vector<double>(n));
+  PlaneMotion pm;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Sample& s = r.samples[i];
+    if (!model->plane_motion(plane - 1, s.t, s.q, s.v, pm))
+      throw py::value_error(fmt::format("plane {}: the model '{}' does not locate its centres",
+                                        plane, model->name()));
+    const double x[8] = {pm.rotor.x(),  pm.rotor.y(),  pm.rotor_rate.x(),  pm.rotor_rate.y(),
+                         pm.stator.x(), pm.stator.y(), pm.stator_rate.x(), pm.stator_rate.y()};
+    for (int k = 0; k < 8; ++k) cols[static_cast<std::size_t>(k)][i] = x[k];
+  }
+  const char* names[8] = {"x_r", "y_r", "vx_r", "vy_r", "x_s", "y_s", "vx_s", "vy_s"};
+  py::dict out;
+  for (int k = 0; k < 8; ++k)
+    out[names[k]] = to_array(std::move(cols[static_cast<std::size_t>(k)]));
+  return out;
+}
+
+/// `rubdyn analyze` on samples held in memory (columns named as in timeseries.csv, phase as
+/// codes) for contact plane `plane` (1-based): the verdicts as analysis.json writes them, and
+/// derived.csv's columns.
+py::tuple analyze_columns(const Case& c, const py::dict& columns, long events, double min_turns,
+                          std::optional<double> t0, std::optional<double> t1,
+                          const std::string& source, int plane) {
+  AnalysisOptions o;
+  o.min_turns = min_turns;
+  o.t0 = t0;
+  o.t1 = t1;
+  const auto bad = analysis_option_problems(o);
+  if (!bad.empty()) throw py::value_error(bad.front());
+  RunRecord r = record_of_columns(c, columns, source);
+  r.events = events;
+  std::vector<DerivedSample> d;
+  try {
+    d = derive(r, plane - 1);
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  }
   const RunVerdicts v = verdicts(r, d, o);
   py::dict out;
   auto number = [&](const char* name, auto get) {
@@ -392,7 +433,7 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("output_dt", [](const Case& c) { return c.spec.output.dt; })
       .def_property_readonly(
           "kind", [](const Case& c) { return c.spec.model; },
-          "[model] kind: \"rigid-rotor\" or \"jeffcott\"")
+          "[model] kind: \"rigid-rotor\", \"jeffcott\" or \"matrices\"")
       .def_property_readonly("model",
                              [](const Case& c) { return std::string(build_model(c.spec)->name()); })
       .def(
@@ -419,6 +460,24 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("mu",
                              [](const Case& c) { return build_model(c.spec)->contact_law(0).mu; })
       .def_property_readonly("torque", [](const Case& c) { return nominal_torque(c.spec); })
+      .def_property_readonly(
+          "contacts",
+          [](const Case& c) {
+            const auto model = build_model(c.spec);
+            py::list out;
+            for (int k = 0; k < model->contact_count(); ++k) {
+              py::dict d;
+              d["gap"] = model->gap_scale(k);
+              d["radius"] = model->contact_radius(k);
+              d["mu"] = model->contact_law(k).mu;
+              d["e_n"] = model->contact_law(k).e_n;
+              d["e_t"] = model->contact_law(k).e_t;
+              out.append(d);
+            }
+            return out;
+          },
+          "Each contact plane's gap, seal radius and law (gap, radius, mu, e_n, e_t), in the "
+          "order of the columns d_N_1, ...")
       .def_property_readonly("q0", [](const Case& c) { return Vec(c.spec.initial.q0); })
       .def_property_readonly("v0", [](const Case& c) { return Vec(c.spec.initial.v0); })
       .def_property_readonly(
@@ -463,7 +522,10 @@ PYBIND11_MODULE(_core, m) {
   m.def("with_overrides", &with_overrides, py::arg("case"), py::arg("overrides"));
   m.def("analyze", &analyze_columns, py::arg("case"), py::arg("columns"), py::arg("events"),
         py::arg("min_turns"), py::arg("t0") = py::none(), py::arg("t1") = py::none(),
-        py::arg("source") = "result");
+        py::arg("source") = "result", py::arg("plane") = 1);
+  m.def("plane_columns", &plane_columns, py::arg("case"), py::arg("columns"), py::arg("plane"),
+        "The centres of contact plane `plane` (1-based) at every sample: x_r, y_r, vx_r, vy_r "
+        "(the rotor's point), x_s, y_s, vx_s, vy_s (the ring's centre; 0 for a fixed ring)");
   m.def("run", &run_case, py::arg("case"), py::arg("progress") = py::none(),
         py::arg("progress_interval") = 0.1,
         "(columns, events, summary_json) of one run; the GIL is released while it runs");

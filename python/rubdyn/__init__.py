@@ -299,12 +299,13 @@ class Analysis:
                 f"whip_onset={v['whip_onset']}>")
 
 
-def analyze(result, min_turns=1.0, t_window=None):
+def analyze(result, min_turns=1.0, t_window=None, plane=1):
     """`rubdyn analyze` on a Result (of rubdyn.run, or rubdyn.read of an output folder, which
     needs its case.resolved.toml) or on an output folder's path: the same verdicts and derived
     quantities as the CLI's analysis.json and derived.csv (one C++ definition), computed in
     memory, nothing written. min_turns: orbit revolutions for a sustained whirl; t_window:
-    (t0, t1) to analyse a part of the run. Returns an Analysis."""
+    (t0, t1) to analyse a part of the run; plane: the contact plane analysed (1-based; with
+    several planes the CLI writes plane k's files in analysis/plane_k/). Returns an Analysis."""
     import json
     import numpy as np
     if isinstance(result, (str, os.PathLike)):
@@ -325,8 +326,10 @@ def analyze(result, min_turns=1.0, t_window=None):
     n_events = 0 if result.events is None else len(result.events)
     if "t" in columns and len(columns["t"]) == 0:
         raise ValueError(f"analyze: result ({result.source}) has no samples")
+    if isinstance(plane, bool) or not isinstance(plane, (int, np.integer)):
+        raise TypeError(f"analyze: plane must be an integer (1-based), not {plane!r}")
     text, derived = _core.analyze(result.case, columns, n_events, min_turns, t0, t1,
-                                  "analyze: result")
+                                  "analyze: result", int(plane))
     for key in ("sustained", "sign_run"):
         derived[key] = derived[key].astype(bool)
     return Analysis(json.loads(text), derived)

@@ -54,6 +54,10 @@ def _result(res):
 
 
 def _case_value(res, name, default=None):
+    # a plane's view (Result.plane) carries that plane's gap, radius and law
+    info = res.__dict__.get("plane_info") if isinstance(res, Result) else None
+    if info is not None and name in info:
+        return info[name]
     case = getattr(res, "case", None)
     return getattr(case, name) if case is not None else default
 
@@ -70,6 +74,9 @@ def _title(fig, res, what):
     name = _case_value(res, "name") or os.path.basename(str(res.source or "")) or "run"
     mu = _case_value(res, "mu")
     extra = f", mu = {mu:g}" if mu is not None else ""
+    k = res.__dict__.get("plane_index") if isinstance(res, Result) else None
+    if k is not None and res.case is not None and len(res.case.contacts) > 1:
+        extra = f", plane {k}" + extra
     fig.suptitle(f"{what}: {name}{extra}", fontsize=11)
 
 
@@ -371,24 +378,33 @@ FIGURES = {"omega": omega, "orbit": orbit, "contact": contact, "friction": frict
 
 
 def write_all(res, out_dir, dpi=130):
-    """Writes every figure as out_dir/<name>.png; returns the paths."""
+    """Writes every figure as out_dir/<name>.png; returns the paths. With several contact
+    planes, the figures of one plane (orbit, contact, friction, timeline, spectrogram) are drawn
+    for each plane k as <name>_k.png (Result.plane), the spin once."""
     plt = _plt()
     res = _result(res)
     os.makedirs(out_dir, exist_ok=True)
     paths = []
-    for name, make in FIGURES.items():
-        fig = make(res)
+
+    def save(fig, name):
         path = os.path.join(out_dir, f"{name}.png")
         fig.savefig(path, dpi=dpi)
         plt.close(fig)
         paths.append(path)
+
+    planes = res.planes
+    for name, make in FIGURES.items():
+        if planes <= 1 or name == "omega":
+            save(make(res), name)
+            continue
+        for k in range(1, planes + 1):
+            save(make(res.plane(k)), f"{name}_{k}")
     analysis = os.path.join(str(res.source or ""), "analysis")
-    if res.source and os.path.exists(os.path.join(analysis, "spectrogram.csv")):
-        fig = spectrogram(analysis)  # written by `rubdyn analyze OUT_DIR`
-        path = os.path.join(out_dir, "spectrogram.png")
-        fig.savefig(path, dpi=dpi)
-        plt.close(fig)
-        paths.append(path)
+    for k in range(1, max(planes, 1) + 1):
+        # written by `rubdyn analyze OUT_DIR`: plane 1 in analysis/, plane k in analysis/plane_k
+        folder = analysis if k == 1 else os.path.join(analysis, f"plane_{k}")
+        if res.source and os.path.exists(os.path.join(folder, "spectrogram.csv")):
+            save(spectrogram(folder), "spectrogram" if planes <= 1 else f"spectrogram_{k}")
     return paths
 
 

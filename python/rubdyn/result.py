@@ -18,8 +18,10 @@ EVENT_FIELDS = tuple((name, _EVENT_TEXT.get(name, "f8")) for name in _core.event
 
 
 def _events_array(columns, n):
-    ev = np.zeros(n, dtype=list(EVENT_FIELDS))
-    for name, _ in EVENT_FIELDS:
+    # with several contacts events.csv has a `contact` column (1-based) after the others
+    fields = list(EVENT_FIELDS) + ([("contact", "i8")] if "contact" in columns else [])
+    ev = np.zeros(n, dtype=fields)
+    for name, _ in fields:
         ev[name] = columns[name] if n else []
     return ev
 
@@ -62,6 +64,43 @@ class Result:
 
     def keys(self):
         return self.columns.keys()
+
+    @property
+    def planes(self):
+        """The number of contact planes (columns d_N_1 ... d_N_K with several, d_N with one)."""
+        if "phase" in self.columns:
+            return 1
+        k = 0
+        while f"phase_{k + 1}" in self.columns:
+            k += 1
+        return k
+
+    def plane(self, k):
+        """Contact plane k (1-based) as a Result with one plane's columns under the one-plane
+        names: d_N, v_N, v_t, F_N, F_T, phase of plane k; x_r, y_r, vx_r, vy_r its rotor point and
+        x_s, y_s, vx_s, vy_s its ring's centre (from the model: LagrangianModel::plane_motion,
+        which interpolates the rotor between its coordinates for a [[plane]]); the events of
+        that contact only; .plane_info its gap, radius and law. Every other column as in this
+        Result. A one-plane Result's plane(1) has the same columns, the centres recomputed."""
+        n = self.planes
+        if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 1 <= k <= n:
+            raise ValueError(f"plane {k!r}: this result has {n} contact plane(s), numbered 1..{n}")
+        if self.case is None:
+            raise ValueError("plane() needs the run's case (rubdyn.read found no "
+                             "case.resolved.toml)")
+        cols = dict(self.columns)
+        if n > 1:
+            for base in ("d_N", "v_N", "v_t", "F_N", "F_T", "phase"):
+                cols[base] = self.columns[f"{base}_{k}"]
+        numeric = {name: np.asarray(v, dtype=float) for name, v in self.columns.items()}
+        cols.update(_core.plane_columns(self.case, numeric, int(k)))
+        events = self.events
+        if events is not None and n > 1 and "contact" in events.dtype.names:
+            events = events[events["contact"] == k]
+        view = Result(cols, events, self.summary, case=self.case, source=self.source)
+        view.plane_index = int(k)
+        view.plane_info = self.case.contacts[k - 1]
+        return view
 
     @property
     def phase_names(self):
