@@ -122,6 +122,25 @@ int check_command(const CaseArgs& a) {
   row("M12 = nu (1-nu) m - Jd/l^2", d.M12, "kg");
   row("M22 = nu^2 m + Jd/l^2", d.M22, "kg");
   row("H = Jp / l^2", d.H, "kg");
+  if (!c.params.planes.empty()) {
+    // several planes: the statics and frequencies below are the single plane's formulas;
+    // `rubdyn campbell` gives this model's frequencies
+    fmt::print("rub planes ([[plane]]; rotor point z_k = (1 - s) z_b + s z_r, s = position / l)\n");
+    fmt::print("  {:>5} {:>10} {:>8} {:>10} {:>10} {:>6}  {}\n", "plane", "position", "s", "radius",
+               "gap", "mu", "ring");
+    for (std::size_t k = 0; k < c.params.planes.size(); ++k) {
+      const PlaneParams& pl = c.params.planes[k];
+      fmt::print("  {:>5} {:>10.6g} {:>8.4g} {:>10.6g} {:>10.6g} {:>6.3g}  {}\n", k + 1,
+                 pl.position, pl.position / d.l, pl.radius, pl.gap, pl.contact.mu,
+                 pl.rigid ? std::string("fixed")
+                          : fmt::format("m_s {:.6g} kg, k_s {:.6g} N/m, c_s {:.6g} N s/m", pl.mass,
+                                        pl.k, pl.c));
+    }
+    fmt::print("  natural frequencies: rubdyn campbell (this model's linearisation)\n");
+    spin_rows(omega0, omega_lim, d.free_acceleration, d.t_free_to_omega_lim,
+              "s = (omega_lim - omega0) Jp / tau_a (without contact)");
+    return 0;
+  }
   fmt::print("static equilibrium under gravity, rotor at rest\n");
   if (d.rests_on_stator) {
     fmt::print(

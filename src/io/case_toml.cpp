@@ -103,20 +103,73 @@ class SchemaBuilder {
 
 // ---- each model's own keys -------------------------------------------------------------------
 
-void rigid_rotor_keys(SchemaBuilder& b) {
+/// The section of plane k (0-based) of a rigid rotor's [[plane]] array: "plane.<k+1>" (the
+/// array's tables are read as these sections; case.resolved.toml writes them back as [[plane]]).
+std::string plane_section(std::size_t k) {
+  return "plane." + std::to_string(k + 1);
+}
+
+void rigid_rotor_keys(SchemaBuilder& b, const CaseSpec& spec) {
+  using S = const CaseSpec&;
+  const auto single = [](S c) { return c.params.planes.empty(); };
+  // with [[plane]] tables each plane has its own seal, ring and law: the single plane's keys
+  // are refused with where they now live
+  const auto moved = [](const char* where) {
+    return [where](S c) {
+      return c.params.planes.empty()
+                 ? std::string()
+                 : fmt::format("with [[plane]] tables each plane has its own {}", where);
+    };
+  };
   b.num("rotor", "mass", true, [](CaseSpec& c) { return &c.params.rotor.mass; });
   b.num("rotor", "Jd", true, [](CaseSpec& c) { return &c.params.rotor.Jd; });
   b.num("rotor", "Jp", true, [](CaseSpec& c) { return &c.params.rotor.Jp; });
   b.num("rotor", "L", true, [](CaseSpec& c) { return &c.params.rotor.L; });
   b.num("rotor", "delta", true, [](CaseSpec& c) { return &c.params.rotor.delta; });
   b.num("rotor", "d", true, [](CaseSpec& c) { return &c.params.rotor.d; });
-  b.num("rotor", "radius", true, [](CaseSpec& c) { return &c.params.rotor.radius; });
+  b.num(
+      "rotor", "radius", false, [](CaseSpec& c) { return &c.params.rotor.radius; },
+      moved("seal radius: radius in each [[plane]]"), single);
   b.num("bearing", "k", true, [](CaseSpec& c) { return &c.params.bearing.k; });
   b.num("bearing", "c", true, [](CaseSpec& c) { return &c.params.bearing.c; });
-  b.num("stator", "mass", true, [](CaseSpec& c) { return &c.params.stator.mass; });
-  b.num("stator", "k", true, [](CaseSpec& c) { return &c.params.stator.k; });
-  b.num("stator", "c", true, [](CaseSpec& c) { return &c.params.stator.c; });
-  b.num("stator", "gap", true, [](CaseSpec& c) { return &c.params.stator.gap; });
+  const auto ring = moved(
+      "ring: stator_mass, stator_k, stator_c (or stator_rigid = true) and gap in each "
+      "[[plane]]");
+  b.num(
+      "stator", "mass", false, [](CaseSpec& c) { return &c.params.stator.mass; }, ring, single);
+  b.num(
+      "stator", "k", false, [](CaseSpec& c) { return &c.params.stator.k; }, ring, single);
+  b.num(
+      "stator", "c", false, [](CaseSpec& c) { return &c.params.stator.c; }, ring, single);
+  b.num(
+      "stator", "gap", false, [](CaseSpec& c) { return &c.params.stator.gap; }, ring, single);
+  // the planes: one section per table of the [[plane]] array
+  for (std::size_t k = 0; k < spec.params.planes.size(); ++k) {
+    const std::string sec = plane_section(k);
+    auto at = [k](CaseSpec& c) -> PlaneParams& { return c.params.planes[k]; };
+    b.num(sec, "position", true, [at](CaseSpec& c) { return &at(c).position; });
+    b.num(sec, "radius", true, [at](CaseSpec& c) { return &at(c).radius; });
+    b.num(sec, "gap", true, [at](CaseSpec& c) { return &at(c).gap; });
+    b.num(sec, "mu", true, [at](CaseSpec& c) { return &at(c).contact.mu; });
+    b.num(sec, "e_n", false, [at](CaseSpec& c) { return &at(c).contact.e_n; });
+    b.num(sec, "e_t", false, [at](CaseSpec& c) { return &at(c).contact.e_t; });
+    b.flag(sec, "stator_rigid", [at](CaseSpec& c) { return &at(c).rigid; });
+    const auto sprung = [k](S c) { return !c.params.planes[k].rigid; };
+    const auto rigid_refuses = [k](S c) {
+      return c.params.planes[k].rigid
+                 ? std::string(
+                       "a rigid ring (stator_rigid = true) is fixed, without mass, spring or "
+                       "damper: remove this key")
+                 : std::string();
+    };
+    b.num(
+        sec, "stator_mass", false, [at](CaseSpec& c) { return &at(c).mass; }, rigid_refuses,
+        sprung);
+    b.num(
+        sec, "stator_k", false, [at](CaseSpec& c) { return &at(c).k; }, rigid_refuses, sprung);
+    b.num(
+        sec, "stator_c", false, [at](CaseSpec& c) { return &at(c).c; }, rigid_refuses, sprung);
+  }
 }
 
 void jeffcott_keys(SchemaBuilder& b) {
@@ -194,10 +247,22 @@ constexpr int kMaxMatrixSize = 1000;
 // ---- what every model has --------------------------------------------------------------------
 
 void contact_and_load_keys(SchemaBuilder& b) {
-  b.num("contact", "mu", true, [](CaseSpec& c) { return &c.contact().mu; });
-  b.num("contact", "e_n", false, [](CaseSpec& c) { return &c.contact().e_n; });
-  b.num("contact", "e_t", false, [](CaseSpec& c) { return &c.contact().e_t; });
   using S = const CaseSpec&;
+  // a rigid rotor with [[plane]] tables has a law per plane
+  const auto one_law = [](S c) { return c.model != "rigid-rotor" || c.params.planes.empty(); };
+  const auto law_moved = [](S c) {
+    return c.model == "rigid-rotor" && !c.params.planes.empty()
+               ? std::string(
+                     "with [[plane]] tables each plane has its own law: mu, e_n, e_t in "
+                     "each [[plane]]")
+               : std::string();
+  };
+  b.num(
+      "contact", "mu", false, [](CaseSpec& c) { return &c.contact().mu; }, law_moved, one_law);
+  b.num(
+      "contact", "e_n", false, [](CaseSpec& c) { return &c.contact().e_n; }, law_moved);
+  b.num(
+      "contact", "e_t", false, [](CaseSpec& c) { return &c.contact().e_t; }, law_moved);
   const auto torque_driven = [](S c) { return c.loads().spin == SpinDrive::Torque; };
   const auto prescribed_refuses = [](S c) {
     return c.loads().spin == SpinDrive::Prescribed
@@ -291,7 +356,7 @@ std::vector<KeySpec> schema(const CaseSpec& c) {
   if (c.model == "jeffcott") {
     jeffcott_keys(b);
   } else if (c.model == "rigid-rotor") {
-    rigid_rotor_keys(b);
+    rigid_rotor_keys(b, c);
   } else if (c.model == "matrices") {
     matrices_keys(b);
   }
@@ -381,6 +446,7 @@ class Loader {
                          std::string(e.description())});
       throw CaseError(issues_);
     }
+    split_planes(doc);
     apply_overrides(doc, overrides);
     CaseSpec c;
     c.source = source_;
@@ -413,6 +479,34 @@ class Loader {
     issues_.push_back({o.file, o.line, key, std::move(value), std::move(rule)});
   }
 
+  /// The [[plane]] array's tables become the sections plane.1, plane.2, ... (their nodes keep
+  /// their lines), so that every key of a plane is read, checked and named like any other:
+  /// plane.2.mu. A [plane] table or a value that is not an array of tables is refused.
+  void split_planes(toml::table& doc) {
+    toml::node* n = doc.get("plane");
+    if (!n) return;
+    toml::array* arr = n->as_array();
+    if (!arr || !arr->is_array_of_tables() || arr->empty()) {
+      issue("plane", n, node_text(*n),
+            "must be an array of tables: one [[plane]] table per rub plane (at least one)");
+      doc.erase("plane");
+      return;
+    }
+    if (arr->size() > static_cast<std::size_t>(kMaxPlanes)) {
+      issue("plane", n, fmt::format("{} [[plane]] tables", arr->size()),
+            fmt::format("at most {} planes", kMaxPlanes));
+      doc.erase("plane");
+      return;
+    }
+    // (moved, not copied: a copied node forgets its line)
+    std::vector<toml::table> tables;
+    for (toml::node& t : *arr) tables.push_back(std::move(*t.as_table()));
+    doc.erase("plane");
+    for (std::size_t k = 0; k < tables.size(); ++k)
+      doc.insert(plane_section(k), std::move(tables[k]));
+    planes_in_file_ = tables.size();
+  }
+
   void apply_overrides(toml::table& doc, const std::vector<std::string>& overrides) {
     for (const auto& ov : overrides) {
       const auto eq = ov.find('=');
@@ -434,7 +528,9 @@ class Loader {
                            "an override must read section.key=value"});
         continue;
       }
-      const std::string section = lhs.substr(0, dot), key = lhs.substr(dot + 1);
+      // (the last dot: a plane's keys are plane.K.key)
+      const auto last = lhs.rfind('.');
+      const std::string section = lhs.substr(0, last), key = lhs.substr(last + 1);
       const std::string rhs = ov.substr(eq + 1);
       // The value is read as a TOML value (numbers, booleans, quoted strings); anything that is
       // not one (solver.kind=mj) is taken as a bare string.
@@ -497,6 +593,23 @@ class Loader {
       }
     }
     if (c.model == "matrices") read_matrices(doc, c);
+    if (c.model == "rigid-rotor") {
+      // the planes of the file (an override cannot add one) and their rings' kind, which
+      // decides the coordinates
+      c.params.planes.assign(planes_in_file_, PlaneParams{});
+      for (std::size_t k = 0; k < planes_in_file_; ++k) {
+        const toml::node* sec = doc.get(plane_section(k));
+        const toml::node* r =
+            sec && sec->is_table() ? sec->as_table()->get("stator_rigid") : nullptr;
+        if (r && r->as_boolean()) c.params.planes[k].rigid = r->as_boolean()->get();
+      }
+    } else if (planes_in_file_ > 0) {
+      issue("plane", nullptr, "",
+            fmt::format("[[plane]] tables are read by [model] kind = \"rigid-rotor\" only (this "
+                        "case's kind: \"{}\")",
+                        c.model));
+      planes_in_file_ = 0;
+    }
   }
 
   void check_structure(const toml::table& doc, CaseSpec& c, const std::vector<KeySpec>& keys) {
@@ -521,6 +634,24 @@ class Loader {
         continue;
       }
       if (std::find(sections.begin(), sections.end(), key) == sections.end()) {
+        if (key.rfind("plane.", 0) == 0) {
+          // a plane's table: of another model's case (reported by read_model), or one that an
+          // override names beyond the file's [[plane]] tables
+          if (c.model == "rigid-rotor") {
+            const std::string why =
+                fmt::format("no such plane: the case has {} [[plane]] table(s), numbered from 1",
+                            planes_in_file_);
+            const bool by_override =
+                std::any_of(overridden_.begin(), overridden_.end(),
+                            [&](const std::string& o) { return o.rfind(key + ".", 0) == 0; });
+            if (by_override) {
+              issues_.push_back({"--set", 0, key, "", why});
+            } else {
+              issue(key, &node, "", why);
+            }
+          }
+          continue;
+        }
         if (model_known_ &&
             std::find(all.sections.begin(), all.sections.end(), key) != all.sections.end()) {
           issue(key, &node, "",
@@ -734,7 +865,19 @@ class Loader {
           names += (names.empty() ? "" : ", ") + coords[static_cast<std::size_t>(i)].name;
           values += (values.empty() ? "" : ", ") + fmt::format("{:.6g}", c.initial.q0[i]);
         }
-        if (key.empty()) key = "initial." + coords[static_cast<std::size_t>(pc.rotor_x)].name;
+        if (key.empty() && pc.rotor_x >= 0)
+          key = "initial." + coords[static_cast<std::size_t>(pc.rotor_x)].name;
+        if (key.empty()) {
+          // a plane whose rotor point interpolates between B and R: the given rotor
+          // coordinate, else plane K's position
+          for (const char* k : {"initial.x_r", "initial.y_r", "initial.x_b", "initial.y_b"})
+            if (key.empty() && given(k)) key = k;
+          if (key.empty())
+            key = plane_section(static_cast<std::size_t>(pen->contact)) + ".position";
+          if (names.empty())
+            names = "the rotor's point in plane " + std::to_string(pen->contact + 1);
+          if (values.empty()) values = "interpolated between B and R";
+        }
         issue(key, at(key), fmt::format("({}) = ({})", names, values),
               fmt::format("the initial state penetrates the stator: d_N = g0 - |r - s| = {:.6g} m "
                           "< 0",
@@ -770,7 +913,9 @@ class Loader {
     }
     // the rim speed R_r |omega0| against the speed no solid is rigid at (run_envelope.hpp)
     const double R = model.contact_radius(0);
-    const std::string radius_key = c.model == "matrices" ? "contact_node.radius" : "rotor.radius";
+    const std::string radius_key = c.model == "matrices"     ? "contact_node.radius"
+                                   : c.params.planes.empty() ? "rotor.radius"
+                                                             : "plane.1.radius";
     const double omega0 =
         model.spin_coordinate() >= 0 ? std::abs(model.spin(s0.t, s0.q, s0.v)) : 0.0;
     const double rim = R * omega0;
@@ -810,7 +955,8 @@ class Loader {
     rule(r.L > 0, "rotor.L", r.L, "must be > 0 (a length)");
     rule(r.delta > 0, "rotor.delta", r.delta, "must be > 0 (a length)");
     rule(r.d > 0, "rotor.d", r.d, "must be > 0 (a length); d must lie in (0, L - delta]");
-    rule(r.radius > 0, "rotor.radius", r.radius, "must be > 0 (a length)");
+    const bool single = c.params.planes.empty();
+    if (single) rule(r.radius > 0, "rotor.radius", r.radius, "must be > 0 (a length)");
     if (r.L > 0 && r.delta > 0) {
       rule(r.delta < r.L, "rotor.delta", r.delta,
            fmt::format("must be < L = {:.17g} (the contact plane lies on the shaft)", r.L));
@@ -822,11 +968,33 @@ class Loader {
     }
     rule(c.params.bearing.k > 0, "bearing.k", c.params.bearing.k, "must be > 0 (a stiffness)");
     rule(c.params.bearing.c >= 0, "bearing.c", c.params.bearing.c, "must be >= 0 (a damping)");
-    const auto& s = c.params.stator;
-    rule(s.mass > 0, "stator.mass", s.mass, "must be > 0 (a mass)");
-    rule(s.k > 0, "stator.k", s.k, "must be > 0 (a stiffness)");
-    rule(s.c >= 0, "stator.c", s.c, "must be >= 0 (a damping)");
-    rule(s.gap > 0, "stator.gap", s.gap, "must be > 0 (the radial clearance g0)");
+    if (single) {
+      const auto& s = c.params.stator;
+      rule(s.mass > 0, "stator.mass", s.mass, "must be > 0 (a mass)");
+      rule(s.k > 0, "stator.k", s.k, "must be > 0 (a stiffness)");
+      rule(s.c >= 0, "stator.c", s.c, "must be >= 0 (a damping)");
+      rule(s.gap > 0, "stator.gap", s.gap, "must be > 0 (the radial clearance g0)");
+    }
+    for (std::size_t k = 0; k < c.params.planes.size(); ++k) {
+      const PlaneParams& pl = c.params.planes[k];
+      const std::string sec = plane_section(k) + ".";
+      rule(pl.position > 0 && pl.position <= r.L, sec + "position", pl.position,
+           fmt::format("must lie in (0, L] = (0, {:.17g}] (the axial distance from the bearing B "
+                       "to the plane, on the shaft)",
+                       r.L));
+      rule(pl.radius > 0, sec + "radius", pl.radius, "must be > 0 (the seal radius)");
+      rule(pl.gap > 0, sec + "gap", pl.gap, "must be > 0 (the radial clearance g0)");
+      rule(pl.contact.mu >= 0, sec + "mu", pl.contact.mu, "must be >= 0 (a friction coefficient)");
+      rule(pl.contact.e_n >= 0 && pl.contact.e_n <= 1, sec + "e_n", pl.contact.e_n,
+           "must lie in [0, 1] (a restitution)");
+      rule(pl.contact.e_t >= 0 && pl.contact.e_t <= 1, sec + "e_t", pl.contact.e_t,
+           "must lie in [0, 1] (a restitution)");
+      if (!pl.rigid) {
+        rule(pl.mass > 0, sec + "stator_mass", pl.mass, "must be > 0 (the ring's mass)");
+        rule(pl.k > 0, sec + "stator_k", pl.k, "must be > 0 (the ring's support stiffness)");
+        rule(pl.c >= 0, sec + "stator_c", pl.c, "must be >= 0 (the ring's support damping)");
+      }
+    }
     // M(q) is positive definite only if the spin's inertia exceeds the unbalance's share
     // (docs/models.md, 2.3): Jp > u_b^2 / m
     const double ub = c.params.loads.unbalance;
@@ -1101,9 +1269,11 @@ class Loader {
 
   void common_rules(const CaseSpec& c) {
     const auto& k = c.contact();
-    rule(k.mu >= 0, "contact.mu", k.mu, "must be >= 0 (a friction coefficient)");
-    rule(k.e_n >= 0 && k.e_n <= 1, "contact.e_n", k.e_n, "must lie in [0, 1] (a restitution)");
-    rule(k.e_t >= 0 && k.e_t <= 1, "contact.e_t", k.e_t, "must lie in [0, 1] (a restitution)");
+    if (c.model != "rigid-rotor" || c.params.planes.empty()) {  // (else each plane's law)
+      rule(k.mu >= 0, "contact.mu", k.mu, "must be >= 0 (a friction coefficient)");
+      rule(k.e_n >= 0 && k.e_n <= 1, "contact.e_n", k.e_n, "must lie in [0, 1] (a restitution)");
+      rule(k.e_t >= 0 && k.e_t <= 1, "contact.e_t", k.e_t, "must lie in [0, 1] (a restitution)");
+    }
     rule(c.run.t_start >= 0, "run.t_start", c.run.t_start, "must be >= 0");
     rule(c.run.t_end > 0, "run.t_end", c.run.t_end, "must be > 0");
     if (c.run.t_end > 0 && c.run.t_start >= 0) {
@@ -1165,7 +1335,8 @@ class Loader {
   std::vector<CaseIssue> issues_;
   std::set<std::string> overridden_;
   std::map<std::string, const toml::node*> present_;
-  bool model_known_ = true;  // [model] kind names a model of the registry
+  bool model_known_ = true;         // [model] kind names a model of the registry
+  std::size_t planes_in_file_ = 0;  // the tables of the file's [[plane]] array
   // kind "matrices": the keys read_model resolved (read_values keeps them), the problems of the
   // files (reported by matrices_rules), whether every matrix was read and is valid
   std::set<std::string> read_early_;
@@ -1225,7 +1396,9 @@ std::string to_toml(const CaseSpec& c) {
   for (const CaseEntry& e : case_values(c)) {
     if (section != e.section) {
       section = e.section;
-      out += fmt::format("\n[{}]\n", section);
+      // a plane's section plane.K is the K-th table of the [[plane]] array
+      out += section.rfind("plane.", 0) == 0 ? std::string("\n[[plane]]\n")
+                                             : fmt::format("\n[{}]\n", section);
     }
     std::string v;
     if (const double* x = std::get_if<double>(&e.value)) {

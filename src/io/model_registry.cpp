@@ -13,8 +13,8 @@ namespace rubdyn {
 
 namespace {
 
-std::vector<Coordinate> rigid_rotor_coordinates(const CaseSpec&) {
-  return RotorStatorModel(RotorStatorParams{}).coordinates();
+std::vector<Coordinate> rigid_rotor_coordinates(const CaseSpec& spec) {
+  return RotorStatorModel::coordinates_of(spec.params);
 }
 std::unique_ptr<LagrangianModel> build_rigid_rotor(const CaseSpec& spec) {
   return std::make_unique<RotorStatorModel>(spec.params);
@@ -42,8 +42,9 @@ std::unique_ptr<LagrangianModel> build_matrices(const CaseSpec& spec) {
 const std::vector<ModelEntry>& model_registry() {
   static const std::vector<ModelEntry> table = {
       {"rigid-rotor",
-       "the paper's rigid rotor on one bearing inside a sprung stator ring (7 dofs)",
-       {"rotor", "bearing", "stator"},
+       "the paper's rigid rotor on one bearing inside a sprung stator ring (7 dofs), or rubbing "
+       "at several planes ([[plane]]), each with its own sprung or fixed ring",
+       {"rotor", "bearing", "stator", "plane"},
        &rigid_rotor_coordinates,
        &build_rigid_rotor},
       {"jeffcott",

@@ -5,7 +5,9 @@
 
 namespace rubdyn {
 
-const std::vector<Coordinate>& RotorStatorModel::coordinates() const {
+namespace {
+
+const std::vector<Coordinate>& single_plane_coordinates() {
   using R = CoordinateRole;
   static const std::vector<Coordinate> c = {
       {"x_b", "vx_b", "vx_b", "m", "bearing B, horizontal", R::BearingX, 0},
@@ -19,26 +21,83 @@ const std::vector<Coordinate>& RotorStatorModel::coordinates() const {
   return c;
 }
 
+}  // namespace
+
+std::vector<Coordinate> RotorStatorModel::coordinates_of(const RotorStatorParams& p) {
+  if (p.planes.empty()) return single_plane_coordinates();
+  using R = CoordinateRole;
+  // the rotor's coordinates as in the single-plane model (R: L - delta from B, the point the
+  // paper's coordinates describe; roles RotorX/Y of plane 0 name it for the ensembles' offset),
+  // then each sprung ring's centre, in plane order
+  std::vector<Coordinate> c(single_plane_coordinates().begin(),
+                            single_plane_coordinates().begin() + 5);
+  c[2].meaning = "rotor centre at R (L - delta from the bearing B), horizontal";
+  c[3].meaning = "rotor centre at R (L - delta from the bearing B), vertical";
+  for (std::size_t k = 0; k < p.planes.size(); ++k) {
+    if (p.planes[k].rigid) continue;
+    const std::string n = std::to_string(k + 1);
+    const int plane = static_cast<int>(k);
+    c.push_back({"x_s_" + n, "vx_s_" + n, "vx_s_" + n, "m",
+                 "centre of plane " + n + "'s ring, horizontal", R::StatorX, plane});
+    c.push_back({"y_s_" + n, "vy_s_" + n, "vy_s_" + n, "m",
+                 "centre of plane " + n + "'s ring, vertical", R::StatorY, plane});
+  }
+  return c;
+}
+
+const std::vector<Coordinate>& RotorStatorModel::coordinates() const {
+  return single_ ? single_plane_coordinates() : coords_;
+}
+
 RotorStatorModel::RotorStatorModel(const RotorStatorParams& p)
-    : p_(p), chart_(p.stator.gap, p.rotor.radius) {
+    : p_(p),
+      chart_(p.planes.empty() ? p.stator.gap : p.planes[0].gap,
+             p.planes.empty() ? p.rotor.radius : p.planes[0].radius),
+      single_(p.planes.empty()) {
   const auto& r = p.rotor;
   l_ = r.L - r.delta;
   nu_ = r.d / l_;
+  // the planes and their rings (without planes: the paper's one plane at R on [stator])
+  if (single_) {
+    rings_.push_back({XS, p.stator.mass, p.stator.k, p.stator.c, 1.0 / p.stator.mass});
+    planes_.push_back({1.0, true, p.rotor.radius, p.stator.gap, p.contact, XS});
+    n_ = kDofs;
+  } else {
+    n_ = 5;
+    for (const PlaneParams& pl : p.planes) {
+      Plane g;
+      g.s = pl.position / l_;
+      g.at_R = g.s == 1.0;
+      g.radius = pl.radius;
+      g.gap = pl.gap;
+      g.law = pl.contact;
+      if (!pl.rigid) {
+        g.ring = n_;
+        rings_.push_back({n_, pl.mass, pl.k, pl.c, 1.0 / pl.mass});
+        n_ += 2;
+      }
+      planes_.push_back(g);
+    }
+    coords_ = coordinates_of(p);
+  }
+  // the chart parametrises one plane at R on a sprung ring in (x_s, y_s) = dofs 5, 6: the
+  // paper's model, or one [[plane]] that is exactly it
+  chartable_ = planes_.size() == 1 && planes_[0].at_R && planes_[0].ring == XS;
   const double jl = r.Jd / (l_ * l_);
   M11_ = (1.0 - nu_) * (1.0 - nu_) * r.mass + jl;
   M12_ = nu_ * (1.0 - nu_) * r.mass - jl;
   M22_ = nu_ * nu_ * r.mass + jl;
   H_ = r.Jp / (l_ * l_);
 
-  M0_.setZero(kDofs, kDofs);
+  M0_.setZero(n_, n_);
   M0_(XB, XB) = M0_(YB, YB) = M11_;
   M0_(XR, XR) = M0_(YR, YR) = M22_;
   M0_(XB, XR) = M0_(XR, XB) = M12_;
   M0_(YB, YR) = M0_(YR, YB) = M12_;
   M0_(TH, TH) = r.Jp;
-  M0_(XS, XS) = M0_(YS, YS) = p.stator.mass;
+  for (const Ring& g : rings_) M0_(g.dof, g.dof) = M0_(g.dof + 1, g.dof + 1) = g.mass;
 
-  G_.setZero(kDofs, kDofs);
+  G_.setZero(n_, n_);
   G_(XB, YB) = H_;
   G_(XB, YR) = -H_;
   G_(YB, XB) = -H_;
@@ -48,26 +107,29 @@ RotorStatorModel::RotorStatorModel(const RotorStatorParams& p)
   G_(YR, XB) = H_;
   G_(YR, XR) = -H_;
 
-  D_.setZero(kDofs, kDofs);
+  D_.setZero(n_, n_);
   D_(XB, XB) = D_(YB, YB) = p.bearing.c;
-  D_(XS, XS) = D_(YS, YS) = p.stator.c;
-  K_.setZero(kDofs, kDofs);
+  K_.setZero(n_, n_);
   K_(XB, XB) = K_(YB, YB) = p.bearing.k;
-  K_(XS, XS) = K_(YS, YS) = p.stator.k;
+  for (const Ring& g : rings_) {
+    D_(g.dof, g.dof) = D_(g.dof + 1, g.dof + 1) = g.c;
+    K_(g.dof, g.dof) = K_(g.dof + 1, g.dof + 1) = g.k;
+  }
 
   const double mg = r.mass * p.loads.gravity;
-  fext_.setZero(kDofs);
+  fext_.setZero(n_);
   fext_[YB] = -(1.0 - nu_) * mg;
   fext_[YR] = -nu_ * mg;
   fext_[TH] = p.loads.torque;
   ub_ = p.loads.unbalance;
   phi_u_ = p.loads.unbalance_phase;
-  M0f_ = M0_;
-  Gf_ = G_;
-  Df_ = D_;
-  Kf_ = K_;
+  if (n_ == kDofs) {  // the fixed-size fast paths (mass_matrix, smooth_force_jacobians)
+    M0f_ = M0_;
+    Gf_ = G_;
+    Df_ = D_;
+    Kf_ = K_;
+  }
   detA_ = M11_ * M22_ - M12_ * M12_;
-  Minv_s_ = 1.0 / p.stator.mass;
 }
 
 void RotorStatorModel::solve_mass(VecIn q, MatOut B) const {
@@ -94,8 +156,10 @@ void RotorStatorModel::solve_mass(VecIn q, MatOut B) const {
       r[YB] = zyb - u_yb * th;
       r[YR] = zyr - u_yr * th;
       r[TH] = th;
-      r[XS] *= Minv_s_;
-      r[YS] *= Minv_s_;
+      for (const Ring& g : rings_) {
+        r[g.dof] *= g.inv_mass;
+        r[g.dof + 1] *= g.inv_mass;
+      }
     }
     return;
   }
@@ -113,8 +177,10 @@ void RotorStatorModel::solve_mass(VecIn q, MatOut B) const {
     r[YB] = zyb - u_yb * th;
     r[YR] = zyr - u_yr * th;
     r[TH] = th;
-    r[XS] *= Minv_s_;
-    r[YS] *= Minv_s_;
+    for (const Ring& g : rings_) {
+      r[g.dof] *= g.inv_mass;
+      r[g.dof + 1] *= g.inv_mass;
+    }
   }
 }
 
@@ -188,7 +254,7 @@ ChartScales RotorStatorModel::Chart::scales(ChartMode mode) const {
 void RotorStatorModel::mass_matrix(VecIn q, MatOut M) const {
   // (a fixed-size copy when M is contiguous: unrolled, where an assignment to a Ref of unknown
   // outer stride is a loop)
-  if (M.outerStride() == kDofs) {
+  if (n_ == kDofs && M.outerStride() == kDofs) {
     Eigen::Map<Eigen::Matrix<double, kDofs, kDofs>>(M.data()) = M0f_;
   } else {
     M = M0_;
@@ -218,8 +284,10 @@ void RotorStatorModel::mass_product(VecIn q, VecIn x, VecOut y) const {
   y[XR] = M12_ * x[XB] + M22_ * x[XR] + -Hy * x[TH];
   y[YR] = M12_ * x[YB] + M22_ * x[YR] + -Hx * x[TH];
   y[TH] = Hy * x[XB] + Hx * x[YB] + -Hy * x[XR] + -Hx * x[YR] + p_.rotor.Jp * x[TH];
-  y[XS] = p_.stator.mass * x[XS];
-  y[YS] = p_.stator.mass * x[YS];
+  for (const Ring& g : rings_) {
+    y[g.dof] = g.mass * x[g.dof];
+    y[g.dof + 1] = g.mass * x[g.dof + 1];
+  }
   if (ub_ != 0.0) {
     const double psi = q[TH] + phi_u_, us = ub_ * std::sin(psi), uc = ub_ * std::cos(psi);
     const double bxb = -(1.0 - nu_) * us, byb = (1.0 - nu_) * uc, bxr = -nu_ * us,
@@ -263,14 +331,16 @@ void RotorStatorModel::mass_matrix_product_jacobian(VecIn q, VecIn a, MatOut J) 
 void RotorStatorModel::smooth_forces(double /*t*/, VecIn q, VecIn v, VecOut f) const {
   // f = f_ext - theta' G v - D v - K q, written out (G, D, K are sparse).
   const double Hw = H_ * v[TH];
-  const double cb = p_.bearing.c, cs = p_.stator.c, kb = p_.bearing.k, ks = p_.stator.k;
+  const double cb = p_.bearing.c, kb = p_.bearing.k;
   f[XB] = -Hw * (v[YB] - v[YR]) - cb * v[XB] - kb * q[XB];
   f[YB] = fext_[YB] - Hw * (v[XR] - v[XB]) - cb * v[YB] - kb * q[YB];
   f[XR] = -Hw * (v[YR] - v[YB]);
   f[YR] = fext_[YR] - Hw * (v[XB] - v[XR]);
   f[TH] = p_.loads.drive_torque(v[TH]);  // (fext_[TH] for the constant law)
-  f[XS] = -cs * v[XS] - ks * q[XS];
-  f[YS] = -cs * v[YS] - ks * q[YS];
+  for (const Ring& g : rings_) {
+    f[g.dof] = -g.c * v[g.dof] - g.k * q[g.dof];
+    f[g.dof + 1] = -g.c * v[g.dof + 1] - g.k * q[g.dof + 1];
+  }
   if (ub_ != 0.0) {
     // the centrifugal force u_b Omega^2 e^{i psi}, split (1 - nu) to B and nu to R, and
     // gravity's torque (docs/models.md, 2.3)
@@ -305,7 +375,7 @@ void RotorStatorModel::smooth_force_jacobians(double /*t*/, VecIn q, VecIn v, Ma
     }
     return;
   }
-  if (dfdq.outerStride() == kDofs && dfdv.outerStride() == kDofs) {
+  if (n_ == kDofs && dfdq.outerStride() == kDofs && dfdv.outerStride() == kDofs) {
     // contiguous: the fixed-size matrices (unrolled; the steppers' fast path)
     using M7 = Eigen::Matrix<double, kDofs, kDofs>;
     Eigen::Map<M7> Q(dfdq.data()), V(dfdv.data());
@@ -320,44 +390,84 @@ void RotorStatorModel::smooth_force_jacobians(double /*t*/, VecIn q, VecIn v, Ma
   dfdv.col(TH).noalias() = -(G_ * v);
 }
 
-void RotorStatorModel::compute_contact(int /*k*/, double /*t*/, VecIn q, VecIn v,
+void RotorStatorModel::compute_contact(int k, double /*t*/, VecIn q, VecIn v,
                                        ContactKinematics& c) const {
+  const Plane& pl = planes_[static_cast<std::size_t>(k)];
   // every entry of W_N and W_T written (the zeros too: no memset call in this hot path)
   double* wn = c.W_N.data();
   double* wt = c.W_T.data();
   c.b_N = c.b_T = 0.0;
-  const double sx = q[XR] - q[XS], sy = q[YR] - q[YS];
+  // the rotor's point in the plane (R itself, or the interpolation between B and R) and the
+  // ring's centre (the origin for a fixed ring)
+  const double s = pl.s, sb = 1.0 - s;
+  const double px = pl.at_R ? q[XR] : sb * q[XB] + s * q[XR];
+  const double py = pl.at_R ? q[YR] : sb * q[YB] + s * q[YR];
+  const int d = pl.ring;
+  const double sx = px - (d >= 0 ? q[d] : 0.0), sy = py - (d >= 0 ? q[d + 1] : 0.0);
   // sqrt instead of hypot: positions are O(1e-3) m at most, no overflow or underflow is
   // possible, and hypot's extra precision costs ~2x in the hot path of every solver
   const double rho = std::sqrt(sx * sx + sy * sy);
-  c.d_N = p_.stator.gap - rho;
+  c.d_N = pl.gap - rho;
   if (rho == 0.0) {  // centred rotor: no normal; d_N = g0 > 0, so no contact can exist here
     c.normal_defined = false;
-    for (int i = 0; i < kDofs; ++i) wn[i] = wt[i] = 0.0;
+    for (int i = 0; i < n_; ++i) wn[i] = wt[i] = 0.0;
     c.v_N = c.v_t = c.wdot_N = c.wdot_T = 0.0;
     return;
   }
   c.normal_defined = true;
   const double nx = sx / rho, ny = sy / rho;
   const double tx = ny, ty = -nx;
-  wn[XB] = wn[YB] = wn[TH] = 0.0;
-  wn[XR] = -nx;
-  wn[YR] = -ny;
-  wn[XS] = nx;
-  wn[YS] = ny;
-  wt[XB] = wt[YB] = 0.0;
-  wt[XR] = tx;
-  wt[YR] = ty;
-  wt[TH] = -p_.rotor.radius;
-  wt[XS] = -tx;
-  wt[YS] = -ty;
-  const double dvx = v[XR] - v[XS], dvy = v[YR] - v[YS];
+  for (int i = TH + 1; i < n_; ++i) wn[i] = wt[i] = 0.0;  // the rings (none but this plane's)
+  wn[TH] = 0.0;
+  if (pl.at_R) {
+    wn[XB] = wn[YB] = 0.0;
+    wn[XR] = -nx;
+    wn[YR] = -ny;
+    wt[XB] = wt[YB] = 0.0;
+    wt[XR] = tx;
+    wt[YR] = ty;
+  } else {
+    wn[XB] = -sb * nx;
+    wn[YB] = -sb * ny;
+    wn[XR] = -s * nx;
+    wn[YR] = -s * ny;
+    wt[XB] = sb * tx;
+    wt[YB] = sb * ty;
+    wt[XR] = s * tx;
+    wt[YR] = s * ty;
+  }
+  wt[TH] = -pl.radius;
+  if (d >= 0) {
+    wn[d] = nx;
+    wn[d + 1] = ny;
+    wt[d] = -tx;
+    wt[d + 1] = -ty;
+  }
+  const double vpx = pl.at_R ? v[XR] : sb * v[XB] + s * v[XR];
+  const double vpy = pl.at_R ? v[YR] : sb * v[YB] + s * v[YR];
+  const double dvx = vpx - (d >= 0 ? v[d] : 0.0), dvy = vpy - (d >= 0 ? v[d + 1] : 0.0);
   const double wn_ = nx * dvx + ny * dvy;  // n . dsr/dt
   const double wt_ = tx * dvx + ty * dvy;  // t . dsr/dt
   c.v_N = -wn_;
-  c.v_t = wt_ - p_.rotor.radius * v[TH];
+  c.v_t = wt_ - pl.radius * v[TH];
   c.wdot_N = -wt_ * wt_ / rho;
   c.wdot_T = wt_ * c.v_N / rho;
+}
+
+bool RotorStatorModel::plane_motion(int k, double /*t*/, VecIn q, VecIn v, PlaneMotion& out) const {
+  const Plane& pl = planes_[static_cast<std::size_t>(k)];
+  const double s = pl.s, sb = 1.0 - s;
+  if (pl.at_R) {
+    out.rotor = {q[XR], q[YR]};
+    out.rotor_rate = {v[XR], v[YR]};
+  } else {
+    out.rotor = {sb * q[XB] + s * q[XR], sb * q[YB] + s * q[YR]};
+    out.rotor_rate = {sb * v[XB] + s * v[XR], sb * v[YB] + s * v[YR]};
+  }
+  const int d = pl.ring;
+  out.stator = d >= 0 ? Vec2(q[d], q[d + 1]) : Vec2::Zero();
+  out.stator_rate = d >= 0 ? Vec2(v[d], v[d + 1]) : Vec2::Zero();
+  return true;
 }
 
 double RotorStatorModel::kinetic_energy(double /*t*/, VecIn q, VecIn v) const {
@@ -369,7 +479,9 @@ double RotorStatorModel::kinetic_energy(double /*t*/, VecIn q, VecIn v) const {
                      M22_ * (v[XR] * v[XR] + v[YR] * v[YR]);
   const double spin =
       p_.rotor.Jp * v[TH] * v[TH] + 2.0 * v[TH] * (Hy * (v[XB] - v[XR]) + Hx * (v[YB] - v[YR]));
-  const double stator = p_.stator.mass * (v[XS] * v[XS] + v[YS] * v[YS]);
+  double stator = 0.0;
+  for (const Ring& g : rings_)
+    stator += g.mass * (v[g.dof] * v[g.dof] + v[g.dof + 1] * v[g.dof + 1]);
   double unb = 0.0;
   if (ub_ != 0.0) {
     const double psi = q[TH] + phi_u_, c = std::cos(psi), s = std::sin(psi);
@@ -381,9 +493,11 @@ double RotorStatorModel::kinetic_energy(double /*t*/, VecIn q, VecIn v) const {
 
 double RotorStatorModel::potential_energy(double /*t*/, VecIn q) const {
   const double mg = p_.rotor.mass * p_.loads.gravity;
+  double rings = 0.0;
+  for (const Ring& g : rings_)
+    rings += 0.5 * g.k * (q[g.dof] * q[g.dof] + q[g.dof + 1] * q[g.dof + 1]);
   return 0.5 * p_.bearing.k * (q[XB] * q[XB] + q[YB] * q[YB]) +
-         mg * (nu_ * q[YR] + (1.0 - nu_) * q[YB]) +
-         0.5 * p_.stator.k * (q[XS] * q[XS] + q[YS] * q[YS]) +
+         mg * (nu_ * q[YR] + (1.0 - nu_) * q[YB]) + rings +
          (ub_ != 0.0 ? p_.loads.gravity * ub_ * std::sin(q[TH] + phi_u_) : 0.0);
 }
 
@@ -392,7 +506,9 @@ double RotorStatorModel::bearing_damping_power(VecIn v) const {
 }
 
 double RotorStatorModel::stator_damping_power(VecIn v) const {
-  return -p_.stator.c * (v[XS] * v[XS] + v[YS] * v[YS]);
+  double P = 0.0;
+  for (const Ring& g : rings_) P += -g.c * (v[g.dof] * v[g.dof] + v[g.dof + 1] * v[g.dof + 1]);
+  return P;
 }
 
 SmoothPower RotorStatorModel::smooth_power(double /*t*/, VecIn /*q*/, VecIn v) const {
@@ -403,9 +519,14 @@ std::optional<LinearModel> RotorStatorModel::linearize(Linearization mode) const
   // About the centred position (H_x = H_y = 0: the spin row decouples) with the spin imposed.
   LinearModel lm;
   const bool tied = mode == Linearization::Tied;
-  // the coordinates kept (the stator's are merged into R's when tied)
-  const std::vector<int> idx =
-      tied ? std::vector<int>{XB, YB, XR, YR} : std::vector<int>{XB, YB, XR, YR, XS, YS};
+  // a fixed ring tied to the rotor is a constraint on its point, not a term of M, D or K
+  if (tied)
+    for (const Plane& pl : planes_)
+      if (pl.ring < 0) return std::nullopt;
+  // the coordinates kept: the rotor's lateral ones, and the rings' unless they are tied
+  std::vector<int> idx = {XB, YB, XR, YR};
+  if (!tied)
+    for (const Ring& g : rings_) idx.insert(idx.end(), {g.dof, g.dof + 1});
   const int n = static_cast<int>(idx.size());
   for (int i : idx) lm.names.push_back(coordinates()[static_cast<std::size_t>(i)].name);
   lm.M.setZero(n, n);
@@ -420,15 +541,28 @@ std::optional<LinearModel> RotorStatorModel::linearize(Linearization mode) const
       lm.K(a, b) = K_(idx[a], idx[b]);
     }
   if (tied) {
-    // the stator tied at R: x_s = x_r, y_s = y_r
-    for (int a : {2, 3}) {
-      lm.M(a, a) += p_.stator.mass;
-      lm.D(a, a) += p_.stator.c;
-      lm.K(a, a) += p_.stator.k;
+    // each ring tied to the rotor's point of its plane, x_s = (1 - s) x_b + s x_r (likewise y):
+    // its mass, damper and spring enter through the weights w = (1 - s, s) on (x_b, x_r); at R
+    // (s = 1) only on x_r
+    for (const Plane& pl : planes_) {
+      const Ring* g = nullptr;
+      for (const Ring& r : rings_)
+        if (r.dof == pl.ring) g = &r;
+      const double w[2] = {1.0 - pl.s, pl.s};
+      for (int axis = 0; axis < 2; ++axis)
+        for (int i = 0; i < 2; ++i)
+          for (int j = 0; j < 2; ++j) {
+            if (pl.at_R && (i == 0 || j == 0)) continue;
+            const int a = 2 * i + axis, b = 2 * j + axis;
+            lm.M(a, b) += w[i] * w[j] * g->mass;
+            lm.D(a, b) += w[i] * w[j] * g->c;
+            lm.K(a, b) += w[i] * w[j] * g->k;
+          }
     }
     lm.nodes = {{0, 1}, {2, 3}};
   } else {
-    lm.nodes = {{0, 1}, {2, 3}, {4, 5}};
+    lm.nodes = {{0, 1}, {2, 3}};
+    for (int k = 4; k < n; k += 2) lm.nodes.push_back({k, k + 1});
   }
   return lm;
 }

@@ -61,6 +61,20 @@
 //          position depends on it through k, and an absolute theta of O(1e3) rad would carry
 //          its round-off (1e-13 rad) into the orbit.
 //   Error weights: phi moves the contact point by g0 per radian, theta - theta0 (stick) by R_r.
+//
+// Several rub planes (RotorStatorParams::planes, a case's [[plane]] tables; docs/models.md,
+// section 6). Plane k sits at the axial distance p_k from B; the rotor's point there is the
+// paper's linear interpolation (eq. 9-10) z_k = (1 - s_k) z_b + s_k z_r, s_k = p_k / l. Its ring
+// is sprung (m_s,k, k_s,k, c_s,k: coordinates x_s_k, y_s_k after theta, in plane order) or fixed
+// at the origin (no coordinates). Contact k: sr = z_k - z_s,k, d_N = g0_k - |sr|, and
+//   W_N = -n on (x_b, y_b) times (1 - s_k), on (x_r, y_r) times s_k, +n on the ring's coordinates,
+//   W_T = t likewise, -R_k on theta,  v_t = t . d(sr)/dt - R_k theta',
+// wdot_N, wdot_T as in contact_kinematics.hpp with |sr|. The mass matrix is the rotor block above
+// (unchanged) with one diagonal m_s,k block per sprung ring; the rings' springs and dampers join
+// K and D. No planes: the paper's single plane at R (s = 1) on the ring of [stator], the model
+// above exactly (the same coordinates, names and arithmetic). The contact chart exists for that
+// model, and for one [[plane]] at R on a sprung ring (the same model under other names); with
+// other planes the event-driven solver uses its projection formulation.
 #include <string_view>
 #include <vector>
 
@@ -74,12 +88,16 @@ enum Dof : int { XB = 0, YB = 1, XR = 2, YR = 3, TH = 4, XS = 5, YS = 6 };
 
 class RotorStatorModel final : public LagrangianModel {
  public:
+  /// The dofs of the paper's model (one plane at R on a sprung ring); with planes, 5 plus two
+  /// per sprung ring.
   static constexpr int kDofs = 7;
   explicit RotorStatorModel(const RotorStatorParams& p);
 
   std::string_view name() const override { return "rigid-rotor"; }
-  int num_dofs() const override { return kDofs; }
+  int num_dofs() const override { return n_; }
   const std::vector<Coordinate>& coordinates() const override;
+  /// The coordinates of the model these parameters make (only p.planes matters).
+  static std::vector<Coordinate> coordinates_of(const RotorStatorParams& p);
   void mass_matrix(VecIn q, MatOut M) const override;
   void mass_product(VecIn q, VecIn x, VecOut y) const override;
   void solve_mass(VecIn q, MatOut B) const override;
@@ -90,18 +108,28 @@ class RotorStatorModel final : public LagrangianModel {
   double kinetic_energy(double t, VecIn q, VecIn v) const override;
   double potential_energy(double t, VecIn q) const override;
   SmoothPower smooth_power(double t, VecIn q, VecIn v) const override;
-  double gap_scale(int /*k*/ = 0) const override { return p_.stator.gap; }
-  const ContactLaw& contact_law(int /*k*/ = 0) const override { return p_.contact; }
-  double contact_radius(int /*k*/ = 0) const override { return p_.rotor.radius; }
-  const ContactChart* contact_chart() const override { return &chart_; }
+  int contact_count() const override { return static_cast<int>(planes_.size()); }
+  double gap_scale(int k = 0) const override { return planes_[static_cast<std::size_t>(k)].gap; }
+  const ContactLaw& contact_law(int k = 0) const override {
+    return planes_[static_cast<std::size_t>(k)].law;
+  }
+  double contact_radius(int k = 0) const override {
+    return planes_[static_cast<std::size_t>(k)].radius;
+  }
+  bool plane_motion(int k, double t, VecIn q, VecIn v, PlaneMotion& out) const override;
+  const ContactChart* contact_chart() const override { return chartable_ ? &chart_ : nullptr; }
   int spin_coordinate() const override { return TH; }
-  /// Tied: the 4-dof (x_b, y_b, x_r, y_r) system with the stator tied at R (campbell.hpp);
-  /// Free: (x_b, y_b, x_r, y_r, x_s, y_s) without contact.
+  /// Tied: the 4-dof (x_b, y_b, x_r, y_r) system with every sprung ring tied to the rotor at
+  /// its plane (its mass, damper and spring on the rotor's point there, through the
+  /// interpolation weights; campbell.hpp); none when a ring is fixed (a constraint, not a
+  /// linear model of this form). Free: (x_b, y_b, x_r, y_r) and the rings, without contact.
   std::optional<LinearModel> linearize(Linearization mode) const override;
 
-  /// Power of the bearing dampers -c_b |v_b|^2 and of the stator dampers -c_s |v_s|^2 [W].
+  /// Power of the bearing dampers -c_b |v_b|^2 and of the rings' dampers -sum c_s |v_s|^2 [W].
   double bearing_damping_power(VecIn v) const;
   double stator_damping_power(VecIn v) const;
+  /// The model without planes: the paper's one plane at R on a sprung ring (7 dofs).
+  bool single_plane() const { return single_; }
   /// Power of the driving torque tau(theta') theta' [W].
   double torque_power(VecIn v) const { return p_.loads.drive_torque(v[TH]) * v[TH]; }
 
@@ -137,15 +165,35 @@ class RotorStatorModel final : public LagrangianModel {
     double g0_, R_r_;
   };
 
+  /// A sprung ring: its coordinates (dof, dof + 1) and support.
+  struct Ring {
+    int dof = 0;
+    double mass = 1, k = 0, c = 0, inv_mass = 1;
+  };
+  /// A rub plane: its interpolation weight, seal, clearance, law and ring (-1: fixed ring).
+  struct Plane {
+    double s = 1.0;    ///< p_k / l
+    bool at_R = true;  ///< s == 1: the rotor's point is (x_r, y_r) itself
+    double radius = 0, gap = 0;
+    ContactLaw law;
+    int ring = -1;  ///< first dof of its ring, or -1
+  };
+
   RotorStatorParams p_;
   Chart chart_;
+  bool single_ = true;     // no planes: the paper's model
+  bool chartable_ = true;  // one plane at R on a sprung ring: the chart applies
+  int n_ = kDofs;
+  std::vector<Ring> rings_;
+  std::vector<Plane> planes_;
+  std::vector<Coordinate> coords_;  // with planes (the single-plane model's are static)
   double l_, nu_, M11_, M12_, M22_, H_;
   Mat G_, D_, K_, M0_;  // M0_: the constant part of M(q)
   // the same, fixed-size: the unrolled fast path of mass_matrix and smooth_force_jacobians
   Eigen::Matrix<double, kDofs, kDofs> M0f_, Gf_, Df_, Kf_;
   Vec fext_;
-  double detA_ = 1, Minv_s_ = 1;  // det of the 2x2 rotor block, 1 / m_s
-  double ub_ = 0, phi_u_ = 0;     // the unbalance u_b [kg m] and its phase [rad]
+  double detA_ = 1;            // det of the 2x2 rotor block
+  double ub_ = 0, phi_u_ = 0;  // the unbalance u_b [kg m] and its phase [rad]
 };
 
 }  // namespace rubdyn
