@@ -359,7 +359,10 @@ void RotorStatorModel::smooth_force_jacobians(double /*t*/, VecIn q, VecIn v, Ma
   if (ub_ != 0.0 || p_.loads.torque_law != TorqueLaw::Constant) {
     dfdq = -K_;
     dfdv = -v[TH] * G_ - D_;
-    dfdv.col(TH).noalias() = -(G_ * v);
+    // (the product into the column, then its sign: -(G v) as one expression would be evaluated
+    // into a temporary, an allocation per Jacobian)
+    dfdv.col(TH).noalias() = G_ * v;
+    dfdv.col(TH) = -dfdv.col(TH);
     dfdv(TH, TH) += p_.loads.drive_torque_slope();
     if (ub_ != 0.0) {
       const double psi = q[TH] + phi_u_, c = std::cos(psi), s = std::sin(psi), om = v[TH];
@@ -387,7 +390,8 @@ void RotorStatorModel::smooth_force_jacobians(double /*t*/, VecIn q, VecIn v, Ma
   }
   dfdq = -K_;
   dfdv = -v[TH] * G_ - D_;
-  dfdv.col(TH).noalias() = -(G_ * v);
+  dfdv.col(TH).noalias() = G_ * v;
+  dfdv.col(TH) = -dfdv.col(TH);
 }
 
 void RotorStatorModel::compute_contact(int k, double /*t*/, VecIn q, VecIn v,

@@ -49,10 +49,13 @@ std::unique_ptr<Stepper> make_stepper(const LagrangianModel& m, const FixedStepO
   if (!(std::isfinite(opt.h) && opt.h > 0.0))
     throw std::invalid_argument(fmt::format("fixed-step scheme {}: h = {} must be finite and > 0",
                                             to_string(opt.scheme), opt.h));
-  if (m.contact_count() != 1)
-    throw std::invalid_argument(
-        fmt::format("fixed-step scheme {}: handles one contact; model '{}' has {}",
-                    to_string(opt.scheme), m.name(), m.contact_count()));
+  const bool carpenter =
+      opt.scheme == FixedStepScheme::CarpOneVC || opt.scheme == FixedStepScheme::CarpQN;
+  if (m.contact_count() < 1 || (carpenter && m.contact_count() != 1))
+    throw std::invalid_argument(fmt::format(
+        "fixed-step scheme {}: handles {}; model '{}' has {} contacts", to_string(opt.scheme),
+        carpenter ? "one contact (mj and mj-proj handle several)" : "one or more contacts",
+        m.name(), m.contact_count()));
   switch (opt.scheme) {
     case FixedStepScheme::CarpOneVC:
     case FixedStepScheme::CarpQN: return make_carpenter(m, opt);
@@ -71,13 +74,25 @@ class RunLoop {
         o_(o),
         env_(env),
         kin_(m.num_dofs()),
-        sample_(m.num_dofs(), 1, static_cast<int>(m.observables().size())) {}
+        K_(m.contact_count()),
+        sample_(m.num_dofs(), K_, static_cast<int>(m.observables().size())),
+        prev_phases_(static_cast<std::size_t>(K_), Phase::Free),
+        forces_(static_cast<std::size_t>(K_)) {}
 
   RunSummary run(Stepper& stepper, const MechanicalState& init, double t_end);
 
  private:
   /// Records a completed state: monitor, the event between steps, output.
   void record(const StepReport& r, double t);
+  /// record()'s monitor and events for a model with several contacts; returns the state's
+  /// phase for the books (the first closed contact's, free when none is).
+  Phase record_contacts(const StepReport& r, double t);
+  /// The event of a contact whose status changed between steps.
+  EventRecord between_steps(Phase before, Phase after, const ContactKinematics& c,
+                            double v_N_before, double P_N, double P_T, double F_N,
+                            double F_T) const;
+  /// The contact forces of a report (one per contact), for the drive's power and observables.
+  const ContactForce* forces(const StepReport& r);
   /// Writes a completed state as a sample (false: the envelope refused it, the run ends).
   bool emit(const StepReport& r, double t);
 
@@ -85,48 +100,97 @@ class RunLoop {
   const FixedStepOptions& o_;
   RunEnvelope& env_;
   ContactKinematics kin_;
+  const int K_;
   Sample sample_;
   Phase prev_phase_ = Phase::Free;
-  long written_ = -1;      // the index of the last state written (-1: none)
-  bool recorded_ = false;  // a state has been recorded (the initial one included)
+  std::vector<Phase> prev_phases_;    // K > 1: each contact's status at the last step
+  std::vector<ContactForce> forces_;  // K > 1: each contact's force (forces())
+  long written_ = -1;                 // the index of the last state written (-1: none)
+  bool recorded_ = false;             // a state has been recorded (the initial one included)
 };
 
-void RunLoop::record(const StepReport& r, double t) {
-  m_.compute_contact(0, t, r.q, r.v, kin_);
-  const ContactKinematics& c = kin_;
-  const bool in_contact = r.phase != Phase::Free;
-  const double omega = m_.spin(t, r.q, r.v);
-  env_.monitor().observe(t, omega, c.d_N, c.v_N, r.F_N, r.F_T, in_contact);
-  env_.check_speed(t, c.v_N, c.v_t);  // (the run loop stops once the summary is incomplete)
-  env_.summary().phase_time[static_cast<int>(r.phase)] += r.index > 0 ? o_.h : 0.0;
-  if (r.index > 0 && r.phase != prev_phase_) {
-    EventRecord e;
-    e.t = t;
-    e.phase_before = prev_phase_;
-    e.phase_after = r.phase;
-    e.d_N = c.d_N;
-    e.v_N_minus = r.v_N_before;
-    e.v_N_plus = c.v_N;
-    e.v_t_plus = c.v_t;
-    e.P_N = r.P_N;
-    e.P_T = r.P_T;
-    e.F_N = r.F_N;
-    e.F_T = r.F_T;
-    e.witness = "between steps";
-    if (prev_phase_ == Phase::Free) {
-      e.kind = r.v_N_before < 0.0 ? EventKind::Impact : EventKind::Contact;
-    } else if (r.phase == Phase::Free) {
-      e.kind = EventKind::Release;
-    } else if (r.phase == Phase::Stick) {
-      e.kind = EventKind::Stick;
-    } else if (prev_phase_ == Phase::Stick) {
-      e.kind = EventKind::Slip;
-    } else {
-      e.kind = EventKind::Reversal;
-    }
-    env_.event(e);
+EventRecord RunLoop::between_steps(Phase before, Phase after, const ContactKinematics& c,
+                                   double v_N_before, double P_N, double P_T, double F_N,
+                                   double F_T) const {
+  EventRecord e;
+  e.phase_before = before;
+  e.phase_after = after;
+  e.d_N = c.d_N;
+  e.v_N_minus = v_N_before;
+  e.v_N_plus = c.v_N;
+  e.v_t_plus = c.v_t;
+  e.P_N = P_N;
+  e.P_T = P_T;
+  e.F_N = F_N;
+  e.F_T = F_T;
+  e.witness = "between steps";
+  if (before == Phase::Free) {
+    e.kind = v_N_before < 0.0 ? EventKind::Impact : EventKind::Contact;
+  } else if (after == Phase::Free) {
+    e.kind = EventKind::Release;
+  } else if (after == Phase::Stick) {
+    e.kind = EventKind::Stick;
+  } else if (before == Phase::Stick) {
+    e.kind = EventKind::Slip;
+  } else {
+    e.kind = EventKind::Reversal;
   }
-  prev_phase_ = r.phase;
+  return e;
+}
+
+Phase RunLoop::record_contacts(const StepReport& r, double t) {
+  env_.monitor().observe_spin(t, m_.spin(t, r.q, r.v));
+  Phase books = Phase::Free;
+  for (int k = 0; k < K_; ++k) {
+    const ContactStep& cs = r.contacts[static_cast<std::size_t>(k)];
+    m_.compute_contact(k, t, r.q, r.v, kin_);
+    const ContactKinematics& c = kin_;
+    env_.monitor().observe_contact(c.d_N, c.v_N, cs.F_N, cs.F_T, cs.phase != Phase::Free,
+                                   m_.contact_law(k).mu);
+    env_.check_speed(t, c.v_N, c.v_t);
+    Phase& prev = prev_phases_[static_cast<std::size_t>(k)];
+    if (r.index > 0 && cs.phase != prev) {
+      EventRecord e =
+          between_steps(prev, cs.phase, c, cs.v_N_before, cs.P_N, cs.P_T, cs.F_N, cs.F_T);
+      e.t = t;
+      e.contact = k;
+      env_.event(e);
+    }
+    prev = cs.phase;
+    if (books == Phase::Free) books = cs.phase;
+  }
+  return books;
+}
+
+const ContactForce* RunLoop::forces(const StepReport& r) {
+  for (int k = 0; k < K_; ++k) {
+    const ContactStep& cs = r.contacts[static_cast<std::size_t>(k)];
+    forces_[static_cast<std::size_t>(k)] = {cs.F_N, cs.F_T};
+  }
+  return forces_.data();
+}
+
+void RunLoop::record(const StepReport& r, double t) {
+  Phase books = r.phase;
+  if (K_ > 1) {
+    books = record_contacts(r, t);
+  } else {
+    m_.compute_contact(0, t, r.q, r.v, kin_);
+    const ContactKinematics& c = kin_;
+    const bool in_contact = r.phase != Phase::Free;
+    const double omega = m_.spin(t, r.q, r.v);
+    env_.monitor().observe(t, omega, c.d_N, c.v_N, r.F_N, r.F_T, in_contact);
+    env_.check_speed(t, c.v_N, c.v_t);  // (the run loop stops once the summary is incomplete)
+    if (r.index > 0 && r.phase != prev_phase_) {
+      EventRecord e =
+          between_steps(prev_phase_, r.phase, c, r.v_N_before, r.P_N, r.P_T, r.F_N, r.F_T);
+      e.t = t;
+      env_.event(e);
+    }
+  }
+  env_.summary().phase_time[static_cast<int>(books)] += r.index > 0 ? o_.h : 0.0;
+  const double omega = m_.spin(t, r.q, r.v);
+  prev_phase_ = books;
   recorded_ = true;
   // output: every N-th step, or the first step end at or after each point of the output grid
   bool out = false;
@@ -136,26 +200,35 @@ void RunLoop::record(const StepReport& r, double t) {
     out = true;
     while (env_.next_output() <= t + 1e-9 * o_.h) env_.advance_output();
   }
-  if (out && emit(r, t)) env_.progress(t, omega, r.phase);
+  if (out && emit(r, t)) env_.progress(t, omega, books);
 }
 
 bool RunLoop::emit(const StepReport& r, double t) {
-  m_.compute_contact(0, t, r.q, r.v, kin_);
-  const ContactKinematics& c = kin_;
   Sample& s = sample_;
   s.t = t;
   s.q = r.q;
   s.v = r.v;
-  ContactSample& cs = s.contacts[0];
-  cs.d_N = c.d_N;
-  cs.v_N = c.v_N;
-  cs.v_t = c.v_t;
-  cs.F_N = r.F_N;
-  cs.F_T = r.F_T;
-  cs.phase = r.phase;
+  for (int k = 0; k < K_; ++k) {
+    m_.compute_contact(k, t, r.q, r.v, kin_);
+    const ContactKinematics& c = kin_;
+    ContactSample& cs = s.contacts[static_cast<std::size_t>(k)];
+    cs.d_N = c.d_N;
+    cs.v_N = c.v_N;
+    cs.v_t = c.v_t;
+    if (K_ > 1) {
+      const ContactStep& st = r.contacts[static_cast<std::size_t>(k)];
+      cs.F_N = st.F_N;
+      cs.F_T = st.F_T;
+      cs.phase = st.phase;
+    } else {
+      cs.F_N = r.F_N;
+      cs.F_T = r.F_T;
+      cs.phase = r.phase;
+    }
+  }
   if (s.observables.size() > 0) {
     const ContactForce F{r.F_N, r.F_T};
-    m_.compute_observables(t, r.q, r.v, r.a, &F, s.observables);
+    m_.compute_observables(t, r.q, r.v, r.a, K_ > 1 ? forces(r) : &F, s.observables);
   }
   written_ = r.index;
   return env_.output(s);
@@ -172,7 +245,7 @@ RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_
   double work_ext = 0.0, work_damp = 0.0, work_contact = 0.0;
   double t_prev = init.t;
   const int n = m_.num_dofs();
-  StepReport reports[2] = {StepReport(n), StepReport(n)};
+  StepReport reports[2] = {StepReport(n, K_), StepReport(n, K_)};
   reports[1].q = init.q;
   reports[1].v = init.v;
   // the applied loads' power; a rheonomic drive's depends on the accelerations and contact
@@ -180,7 +253,7 @@ RunSummary RunLoop::run(Stepper& stepper, const MechanicalState& init, double t_
   const bool rheonomic = m_.rheonomic();
   auto rheonomic_power = [&](double t, const StepReport& r) {
     const ContactForce F{r.F_N, r.F_T};
-    return m_.applied_power(t, r.q, r.v, r.a, &F);
+    return m_.applied_power(t, r.q, r.v, r.a, K_ > 1 ? forces(r) : &F);
   };
   // the initial state's acceleration: the contact-free M^-1 f (a rheonomic drive's power at the
   // start, and the observables of the initial sample that Moreau-Jean's first step does not

@@ -22,6 +22,15 @@ class RunMonitor {
                bool in_contact) {
     if (!std::isfinite(omega) || !std::isfinite(d_N)) return;
     max_pen_ = std::max(max_pen_, -d_N);
+    observe_spin(t, omega);
+    observe_contact_forces(d_N, v_N, F_N, F_T, in_contact, mu_);
+  }
+
+  /// The same for a model with several contacts: the spin once per state (observe_spin), then
+  /// each contact with its own friction coefficient (observe_contact); the invariants are the
+  /// worst over the contacts.
+  void observe_spin(double t, double omega) {
+    if (!std::isfinite(omega)) return;
     if (first_) {
       omega_max_ = omega;
       if (omega >= omega_lim_) t_lim_ = t;
@@ -34,18 +43,29 @@ class RunMonitor {
     omega_final_ = omega;
     t_prev_ = t;
     omega_prev_ = omega;
+  }
+  void observe_contact(double d_N, double v_N, double F_N, double F_T, bool in_contact, double mu) {
+    if (!std::isfinite(d_N)) return;
+    max_pen_ = std::max(max_pen_, -d_N);
+    observe_contact_forces(d_N, v_N, F_N, F_T, in_contact, mu);
+  }
+
+ private:
+  void observe_contact_forces(double d_N, double v_N, double F_N, double F_T, bool in_contact,
+                              double mu) {
     if (in_contact) {
       min_FN_ = std::isnan(min_FN_) ? F_N : std::min(min_FN_, F_N);
       // Cone violation relative to the largest contact force of the run so far: at a lift-off
       // or a stick-to-slip switch F_N and F_T are both ~0 and a ratio to mu F_N is meaningless.
       F_scale_ = std::max({F_scale_, std::abs(F_N), std::abs(F_T)});
-      const double excess = std::abs(F_T) - mu_ * std::max(F_N, 0.0);
+      const double excess = std::abs(F_T) - mu * std::max(F_N, 0.0);
       if (excess > 0.0 && F_scale_ > 0.0) max_cone_ = std::max(max_cone_, excess / F_scale_);
       max_drift_q_ = std::max(max_drift_q_, std::abs(d_N));
       max_drift_v_ = std::max(max_drift_v_, std::abs(v_N));
     }
   }
 
+ public:
   /// Sets t_omega_lim directly (when a solver locates the crossing more accurately).
   void set_omega_lim_time(double t) { t_lim_ = t; }
   bool omega_lim_crossed() const { return !std::isnan(t_lim_); }

@@ -9,6 +9,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "rubdyn/stepping/fixed_step.hpp"
 
@@ -22,11 +23,25 @@ enum class StepOutcome {
 };
 std::string_view to_string(StepOutcome o);
 
+/// One contact's quantities in a step of a model with several contacts.
+struct ContactStep {
+  double F_N = 0, F_T = 0;    ///< contact force (Moreau-Jean: impulse / h)
+  double P_N = 0, P_T = 0;    ///< impulse of the step
+  Phase phase = Phase::Free;  ///< the contact's status in the step
+  double v_N_before = 0;      ///< its v_N at the start of the step
+};
+
 /// The state a step completed, with its contact quantities. Moreau-Jean's step i completes the
 /// state at t_{i+1}; Carpenter's velocity at t_i is central, so its step i completes t_i.
+/// One contact: the scalar fields. Several (K > 1): `contacts`, one entry each; the scalar
+/// fields are then unused.
 struct StepReport {
   StepReport() = default;
-  explicit StepReport(int n) : q(Vec::Zero(n)), v(Vec::Zero(n)), a(Vec::Zero(n)) {}
+  explicit StepReport(int n, int contacts = 1)
+      : q(Vec::Zero(n)),
+        v(Vec::Zero(n)),
+        a(Vec::Zero(n)),
+        contacts(contacts > 1 ? static_cast<std::size_t>(contacts) : 0) {}
   /// Every field but q and v back to its default (the vectors keep their storage).
   void reset() {
     index = 0;
@@ -34,6 +49,7 @@ struct StepReport {
     phase = Phase::Free;
     newton_iters = 0;
     nonunique = unconverged = false;
+    for (ContactStep& c : contacts) c = ContactStep{};
   }
   long index = 0;  ///< the state is at t_0 + index h
   Vec q, v;        ///< the model's size
@@ -49,6 +65,7 @@ struct StepReport {
   long newton_iters = 0;
   bool nonunique = false;    ///< the local contact problem had several solutions (tie rule)
   bool unconverged = false;  ///< carp-qn reached itmax (the run goes on; counted)
+  std::vector<ContactStep> contacts;  ///< K > 1: each contact's (empty for one contact)
 };
 
 class Stepper {
@@ -65,7 +82,7 @@ class Stepper {
 };
 
 /// The stepper of opt.scheme. Throws std::invalid_argument when h is not finite and > 0, or the
-/// model has other than one contact.
+/// model has several contacts and the scheme handles one (Carpenter's; Moreau-Jean handles K).
 std::unique_ptr<Stepper> make_stepper(const LagrangianModel& m, const FixedStepOptions& opt);
 
 // The schemes (one file each).
