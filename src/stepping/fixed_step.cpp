@@ -86,7 +86,7 @@ class RunLoop {
   void record(const StepReport& r, double t);
   /// record()'s monitor and events for a model with several contacts; returns the state's
   /// phase for the books (the first closed contact's, free when none is).
-  Phase record_contacts(const StepReport& r, double t);
+  Phase record_contacts(const StepReport& r, double t, double omega);
   /// The event of a contact whose status changed between steps.
   EventRecord between_steps(Phase before, Phase after, const ContactKinematics& c,
                             double v_N_before, double P_N, double P_T, double F_N,
@@ -138,8 +138,8 @@ EventRecord RunLoop::between_steps(Phase before, Phase after, const ContactKinem
   return e;
 }
 
-Phase RunLoop::record_contacts(const StepReport& r, double t) {
-  env_.monitor().observe_spin(t, m_.spin(t, r.q, r.v));
+Phase RunLoop::record_contacts(const StepReport& r, double t, double omega) {
+  env_.monitor().observe_spin(t, omega);
   Phase books = Phase::Free;
   for (int k = 0; k < K_; ++k) {
     const ContactStep& cs = r.contacts[static_cast<std::size_t>(k)];
@@ -172,13 +172,13 @@ const ContactForce* RunLoop::forces(const StepReport& r) {
 
 void RunLoop::record(const StepReport& r, double t) {
   Phase books = r.phase;
+  const double omega = m_.spin(t, r.q, r.v);
   if (K_ > 1) {
-    books = record_contacts(r, t);
+    books = record_contacts(r, t, omega);
   } else {
     m_.compute_contact(0, t, r.q, r.v, kin_);
     const ContactKinematics& c = kin_;
     const bool in_contact = r.phase != Phase::Free;
-    const double omega = m_.spin(t, r.q, r.v);
     env_.monitor().observe(t, omega, c.d_N, c.v_N, r.F_N, r.F_T, in_contact);
     env_.check_speed(t, c.v_N, c.v_t);  // (the run loop stops once the summary is incomplete)
     if (r.index > 0 && r.phase != prev_phase_) {
@@ -189,7 +189,6 @@ void RunLoop::record(const StepReport& r, double t) {
     }
   }
   env_.summary().phase_time[static_cast<int>(books)] += r.index > 0 ? o_.h : 0.0;
-  const double omega = m_.spin(t, r.q, r.v);
   prev_phase_ = books;
   recorded_ = true;
   // output: every N-th step, or the first step end at or after each point of the output grid

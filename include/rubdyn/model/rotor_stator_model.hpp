@@ -179,8 +179,25 @@ class RotorStatorModel final : public LagrangianModel {
     int ring = -1;  ///< first dof of its ring, or -1
   };
 
+  /// compute_contact of plane k of a model with [[plane]] tables.
+  void plane_contact(int k, VecIn q, VecIn v, ContactKinematics& c) const;
+  /// The rings' rows of a column of solve_mass: divided by their masses.
+  template <class Col>
+  void scale_rings(Col& r) const {
+    if (single_) {
+      r[XS] *= inv_ms_;
+      r[YS] *= inv_ms_;
+      return;
+    }
+    for (const Ring& g : rings_) {
+      r[g.dof] *= g.inv_mass;
+      r[g.dof + 1] *= g.inv_mass;
+    }
+  }
+
   RotorStatorParams p_;
   Chart chart_;
+  double inv_ms_ = 1.0;    // 1 / m_s of the single plane's ring
   bool single_ = true;     // no planes: the paper's model
   bool chartable_ = true;  // one plane at R on a sprung ring: the chart applies
   int n_ = kDofs;

@@ -1,0 +1,179 @@
+#pragma once
+// The Moreau-Jean stepper's class (moreau_jean.cpp: the scheme and its one-contact step;
+// moreau_jean_multi.cpp: the step with several contacts). Internal to src/stepping.
+#include <fmt/format.h>
+
+#include <Eigen/Cholesky>
+#include <span>
+#include <vector>
+
+#include "rubdyn/contact/contact_set.hpp"
+#include "rubdyn/stepping/stepper.hpp"
+#include "simplified_newton.hpp"
+
+namespace rubdyn::detail {
+
+/// The K-contact workspaces of MoreauJean<N, true> (docs/time-steppers.md, 3.1), sized when the
+/// stepper is built so that a step allocates nothing: each contact's kinematics at q_i (cik) and
+/// at the projection (pk), the active contacts' W_N, W_T and Mt^-1 W (in act order), the joint
+/// impulse problem (Delassus W, free velocities u0, ContactSetSolver set) and the joint position
+/// projection (Xp). Empty for one contact: the one-contact stepper is the class it was.
+template <int N, bool Multi>
+struct MultiWork {
+  MultiWork(int /*n*/, int /*K*/) {}
+};
+template <int N>
+struct MultiWork<N, true> {
+  using V = SVec<N>;
+  MultiWork(int n, int K)
+      : set(K),
+        cik(static_cast<std::size_t>(K), ContactKinematics(n)),
+        pk(static_cast<std::size_t>(K), ContactKinematics(n)),
+        WNk(static_cast<std::size_t>(K), V::Zero(n)),
+        WTk(static_cast<std::size_t>(K), V::Zero(n)),
+        XNk(static_cast<std::size_t>(K), V::Zero(n)),
+        XTk(static_cast<std::size_t>(K), V::Zero(n)),
+        bN1k(static_cast<std::size_t>(K), 0.0),
+        bT1k(static_cast<std::size_t>(K), 0.0),
+        sc(static_cast<std::size_t>(K)),
+        Wd(Mat::Zero(2 * K, 2 * K)),
+        Xp(Mat::Zero(n, K)),
+        u0(Vec::Zero(2 * K)) {
+    act.reserve(static_cast<std::size_t>(K));
+    pen.reserve(static_cast<std::size_t>(K));
+  }
+  ContactSetSolver set;
+  std::vector<ContactKinematics> cik, pk;
+  std::vector<V> WNk, WTk, XNk, XTk;
+  std::vector<double> bN1k, bT1k;
+  std::vector<int> act, pen;
+  std::vector<SetContact> sc;
+  Mat Wd, Xp;
+  Vec u0;
+};
+
+/// N: the model's dofs, fixed (a fast path) or Eigen::Dynamic (simplified_newton.hpp).
+template <int N, bool Multi = false>
+class MoreauJean final : public Stepper {
+  using V = SVec<N>;
+  using M = SMat<N>;
+
+ public:
+  MoreauJean(const LagrangianModel& m, const FixedStepOptions& o)
+      : m_(m),
+        n_(m.num_dofs()),
+        law_(m.contact_law(0)),
+        o_(o),
+        project_(o.scheme == FixedStepScheme::MoreauJeanProjected),
+        rheonomic_(m.rheonomic()),
+        newton_(n_, 50),
+        q_(V::Zero(n_)),
+        v_(V::Zero(n_)),
+        v_prev_(V::Zero(n_)),
+        M_(n_, n_),
+        dfdq_(n_, n_),
+        dfdv_(n_, n_),
+        dMa_(n_, n_),
+        Mt_(n_, n_),
+        X_(n_, 1),
+        fi_(V::Zero(n_)),
+        f_(V::Zero(n_)),
+        v_it_(V::Zero(n_)),
+        q_it_(V::Zero(n_)),
+        qe_(V::Zero(n_)),
+        dv_(V::Zero(n_)),
+        Phi_(V::Zero(n_)),
+        vfree_(V::Zero(n_)),
+        vn_(V::Zero(n_)),
+        change_(V::Zero(n_)),
+        xN_(V::Zero(n_)),
+        xT_(V::Zero(n_)),
+        WN_(V::Zero(n_)),
+        WT_(V::Zero(n_)),
+        ci_(n_),
+        kin_(n_),
+        K_(m.contact_count()),
+        mw_(n_, K_) {}
+
+  std::string_view name() const override { return project_ ? "mj-proj" : "mj"; }
+  std::string options_json() const override {
+    if (project_)
+      return fmt::format(
+          "{{\"h\": {:.6g}, \"theta\": {:.6g}, \"eta\": {:.6g}, \"projection\": \"{}\"}}", o_.h,
+          o_.theta, o_.eta, o_.project_with_mass ? "mass" : "identity");
+    return fmt::format("{{\"h\": {:.6g}, \"theta\": {:.6g}, \"eta\": {:.6g}}}", o_.h, o_.theta,
+                       o_.eta);
+  }
+
+  void start(double, const Vec& q0, const Vec& v0) override {
+    q_ = q0;
+    v_ = v_prev_ = v0;
+    prev_impulse_free_ = false;
+    index_ = 0;
+  }
+
+  StepOutcome step(double t, StepReport& r, std::string& message) override;
+
+ private:
+  const LagrangianModel& m_;
+  const int n_;
+  const ContactLaw law_;
+  const FixedStepOptions o_;
+  const bool project_;
+  const bool rheonomic_;
+  SimplifiedNewton<N> newton_;
+  V q_, v_;
+  V v_prev_;                        // v_{i-1}, for the predictor
+  bool prev_impulse_free_ = false;  // the last step had no impulse (and exists)
+  long index_ = 0;
+  // workspaces
+  M M_, dfdq_, dfdv_, dMa_, Mt_;
+  Mat X_;  // (n x 1) the projection direction, solved with the model's mass solve
+  V fi_, f_, v_it_, q_it_, qe_, dv_, Phi_, vfree_, vn_, change_, xN_, xT_, WN_, WT_;
+  ContactKinematics ci_, kin_;
+  const int K_;
+  MultiWork<N, Multi> mw_;  // the K-contact workspaces (empty for one contact)
+  /// One step of the K-contact path: step() of MoreauJean<N, true> (moreau_jean_multi.cpp).
+  /// Multi is a template parameter, not a branch in step(): a branch at its top, or the
+  /// K-contact step compiled in the same unit, changed how GCC inlines the one-contact step's
+  /// Eigen kernels (measured: 5-13 % more instructions per step on the reference case).
+  StepOutcome step_multi(double t, StepReport& r, std::string& message);
+};
+
+/// The most contacts Moreau-Jean takes (the joint projection's system lives on the stack).
+constexpr int kMaxMjContacts = 16;
+/// Solves G x = b in place (m x m, partial pivoting) for the small systems of the K-contact
+/// projection (m <= kMaxMjContacts): false when G is singular.
+using SmallMat =
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxMjContacts, kMaxMjContacts>;
+using SmallVec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxMjContacts, 1>;
+inline bool solve_small(SmallMat& G, SmallVec& b) {
+  const Eigen::Index m = G.rows();
+  for (Eigen::Index k = 0; k < m; ++k) {
+    Eigen::Index p = k;
+    for (Eigen::Index i = k + 1; i < m; ++i)
+      if (std::abs(G(i, k)) > std::abs(G(p, k))) p = i;
+    if (G(p, k) == 0.0) return false;
+    if (p != k) {
+      G.row(p).swap(G.row(k));
+      std::swap(b[p], b[k]);
+    }
+    for (Eigen::Index i = k + 1; i < m; ++i) {
+      const double f = G(i, k) / G(k, k);
+      for (Eigen::Index j = k; j < m; ++j) G(i, j) -= f * G(k, j);
+      b[i] -= f * b[k];
+    }
+  }
+  for (Eigen::Index k = m - 1; k >= 0; --k) {
+    double x = b[k];
+    for (Eigen::Index j = k + 1; j < m; ++j) x -= G(k, j) * b[j];
+    b[k] = x / G(k, k);
+  }
+  return true;
+}
+
+/// The stepper for a model with several contacts (moreau_jean_multi.cpp): dynamic sizes.
+std::unique_ptr<Stepper> make_moreau_jean_multi(const LagrangianModel& m,
+                                                const FixedStepOptions& o);
+
+}  // namespace rubdyn::detail

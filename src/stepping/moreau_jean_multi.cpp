@@ -1,0 +1,211 @@
+// Moreau-Jean with several contacts: MoreauJean<N>::step_multi and its stepper (the scheme is
+// moreau_jean.cpp's; docs/time-steppers.md, section 3.1). A translation unit of its own, so that
+// the one-contact step is compiled as before (sharing the unit changed how GCC inlines its Eigen
+// kernels: measured 5-13 % more instructions per step on the reference case).
+#include "moreau_jean_class.hpp"
+
+namespace rubdyn::detail {
+
+template <int N, bool Multi>
+StepOutcome MoreauJean<N, Multi>::step_multi(double t, StepReport& r, std::string& message) {
+  // The scheme of step() with K contacts: every contact's index set by its predicted gap, the
+  // impulses of the active ones solved jointly at every Newton iterate (contact_set.hpp: the
+  // Delassus matrix W^T Mt^-1 W of all active contacts, Newton's law per contact), and with
+  // mj-proj every penetrating contact projected jointly.
+  const double h = o_.h, th = o_.theta, eta = o_.eta;
+  MultiWork<N, true>& w = mw_;
+  m_.smooth_forces(t, q_, v_, fi_);
+  w.act.clear();
+  for (int k = 0; k < K_; ++k) {
+    ContactKinematics& c = w.cik[static_cast<std::size_t>(k)];
+    m_.compute_contact(k, t, q_, v_, c);
+    w.bN1k[static_cast<std::size_t>(k)] = c.b_N;
+    w.bT1k[static_cast<std::size_t>(k)] = c.b_T;
+    if (rheonomic_) {
+      m_.compute_contact(k, t + h, q_, v_, kin_);
+      w.bN1k[static_cast<std::size_t>(k)] = kin_.b_N;
+      w.bT1k[static_cast<std::size_t>(k)] = kin_.b_T;
+    }
+    if (c.normal_defined && c.d_N + 0.5 * h * c.v_N <= 0.0) w.act.push_back(k);
+  }
+  const int na = static_cast<int>(w.act.size());
+  for (int a = 0; a < na; ++a) {
+    const auto k = static_cast<std::size_t>(w.act[static_cast<std::size_t>(a)]);
+    w.WNk[static_cast<std::size_t>(a)] = w.cik[k].W_N;
+    w.WTk[static_cast<std::size_t>(a)] = w.cik[k].W_T;
+    w.sc[static_cast<std::size_t>(a)] = SetContact{m_.contact_law(static_cast<int>(k)).mu, 0, {}};
+  }
+  V& v = v_it_;
+  v = v_;
+  if (prev_impulse_free_) v += v_ - v_prev_;
+  newton_.begin_step();
+  auto delassus = [&] {  // W^T Mt^{-1} W of the active contacts, with the current matrix
+    for (int a = 0; a < na; ++a) {
+      const auto ia = static_cast<std::size_t>(a);
+      newton_.apply_inverse(w.WNk[ia], w.XNk[ia]);
+      newton_.apply_inverse(w.WTk[ia], w.XTk[ia]);
+    }
+    for (int a = 0; a < na; ++a)
+      for (int b = 0; b < na; ++b) {
+        const auto ia = static_cast<std::size_t>(a), ib = static_cast<std::size_t>(b);
+        w.Wd(2 * a, 2 * b) = w.WNk[ia].dot(w.XNk[ib]);
+        w.Wd(2 * a, 2 * b + 1) = w.WNk[ia].dot(w.XTk[ib]);
+        w.Wd(2 * a + 1, 2 * b) = w.WTk[ia].dot(w.XNk[ib]);
+        w.Wd(2 * a + 1, 2 * b + 1) = w.WTk[ia].dot(w.XTk[ib]);
+      }
+  };
+  if (!newton_.needs_matrix() && na > 0) delassus();
+  bool solved = false;  // the last iterate solved a contact problem (w.set holds it)
+  r.reset();
+  for (;;) {
+    q_it_ = q_ + h * ((1.0 - th) * v_ + th * v);
+    qe_ = (1.0 - eta) * q_ + eta * q_it_;
+    m_.smooth_forces(t + h, q_it_, v, f_);
+    dv_ = v - v_;
+    m_.mass_product(qe_, dv_, Phi_);
+    Phi_ -= h * ((1.0 - th) * fi_ + th * f_);
+    if (newton_.needs_matrix()) {
+      m_.mass_matrix(qe_, M_);
+      m_.smooth_force_jacobians(t + h, q_it_, v, dfdq_, dfdv_);
+      m_.mass_matrix_product_jacobian(qe_, dv_, dMa_);
+      Mt_ = M_ + eta * h * th * dMa_ - h * th * (dfdv_ + h * th * dfdq_);
+      newton_.set_matrix(Mt_);
+      if (na > 0) delassus();
+    }
+    newton_.apply_inverse(Phi_, vfree_);
+    vfree_ = v - vfree_;
+    V& vn = vn_;
+    vn = vfree_;
+    solved = false;
+    if (na > 0) {
+      for (int a = 0; a < na; ++a) {
+        const auto ia = static_cast<std::size_t>(a);
+        const int k = w.act[ia];
+        const ContactKinematics& c = w.cik[static_cast<std::size_t>(k)];
+        const ContactLaw& law = m_.contact_law(k);
+        w.u0[2 * a] = w.WNk[ia].dot(vfree_) + w.bN1k[static_cast<std::size_t>(k)] + law.e_n * c.v_N;
+        w.u0[2 * a + 1] =
+            w.WTk[ia].dot(vfree_) + w.bT1k[static_cast<std::size_t>(k)] + law.e_t * c.v_t;
+      }
+      const auto W = w.Wd.topLeftCorner(2 * na, 2 * na);
+      const auto u0 = w.u0.head(2 * na);
+      const SetOutcome o =
+          w.set.solve(W, u0, std::span<const SetContact>(w.sc.data(), static_cast<std::size_t>(na)),
+                      contact_set_band(W, u0));
+      if (!has_solution(o)) {
+        std::string who;
+        for (int a = 0; a < na; ++a)
+          if (w.set.involved(a))
+            who += fmt::format("{}{}", who.empty() ? "" : ", ",
+                               w.act[static_cast<std::size_t>(a)] + 1);
+        message = fmt::format(
+            "mj: the joint contact problem has no solution at t = {:.17g} ({}; contacts "
+            "involved: {})",
+            t, to_string(o), who.empty() ? "none named" : who);
+        return StepOutcome::Painleve;
+      }
+      r.nonunique = r.nonunique || o == SetOutcome::NonUnique;
+      for (int a = 0; a < na; ++a) {
+        const auto ia = static_cast<std::size_t>(a);
+        vn += w.XNk[ia] * w.set.r_N(a) + w.XTk[ia] * w.set.r_T(a);
+      }
+      solved = true;
+    }
+    change_ = vn - v;
+    v = vn;
+    ++r.newton_iters;
+    if (!all_finite(v)) {
+      message = fmt::format("mj: non-finite iterate at t = {:.17g}", t);
+      return StepOutcome::NonFinite;
+    }
+    const auto next =
+        newton_.after((change_.array().abs() / (1e-14 * v.array().abs() + 1e-15)).maxCoeff());
+    if (next == SimplifiedNewton<N>::Next::Converged) break;
+    if (next == SimplifiedNewton<N>::Next::Failed) {
+      message = fmt::format("mj: Newton did not converge in {} iterations at t = {:.17g}",
+                            newton_.max_iterations(), t);
+      return StepOutcome::NewtonFailed;
+    }
+  }
+  V& q = q_it_;
+  q = q_ + h * ((1.0 - th) * v_ + th * v);
+  if (project_) {
+    // every penetrating contact onto d_N = 0 at once: q += X lambda with X = M^-1 W_N (or W_N,
+    // identity metric) of those contacts and W_N^T X lambda = -d_N (a Newton step; at most 3)
+    for (int it = 0; it < 3; ++it) {
+      w.pen.clear();
+      for (int k = 0; k < K_; ++k) {
+        ContactKinematics& c = w.pk[static_cast<std::size_t>(k)];
+        m_.compute_contact(k, t + h, q, v, c);
+        if (c.normal_defined && c.d_N < 0.0) w.pen.push_back(k);
+      }
+      const int np = static_cast<int>(w.pen.size());
+      if (np == 0) break;
+      for (int a = 0; a < np; ++a)
+        w.Xp.col(a) = w.pk[static_cast<std::size_t>(w.pen[static_cast<std::size_t>(a)])].W_N;
+      if (o_.project_with_mass) m_.solve_mass(q, w.Xp.leftCols(np));
+      SmallMat G(np, np);
+      SmallVec rhs(np);
+      for (int a = 0; a < np; ++a) {
+        const ContactKinematics& ca =
+            w.pk[static_cast<std::size_t>(w.pen[static_cast<std::size_t>(a)])];
+        rhs[a] = -ca.d_N;
+        for (int b = 0; b < np; ++b) G(a, b) = ca.W_N.dot(w.Xp.col(b));
+      }
+      if (!solve_small(G, rhs)) break;  // redundant constraints: left as they are
+      for (int a = 0; a < np; ++a) q += w.Xp.col(a) * rhs[a];
+    }
+  }
+  if (!all_finite(q) || !all_finite(v)) {
+    message = fmt::format("non-finite state at t = {:.17g}", t + h);
+    return StepOutcome::NonFinite;
+  }
+  // the impulses' work with the mid-step velocity, contact by contact
+  dv_ = 0.5 * (v_ + v);
+  bool impulse_free = true;
+  for (int k = 0; k < K_; ++k) {
+    ContactStep& cs = r.contacts[static_cast<std::size_t>(k)];
+    cs.v_N_before = w.cik[static_cast<std::size_t>(k)].v_N;
+  }
+  if (solved) {
+    for (int a = 0; a < na; ++a) {
+      const auto ia = static_cast<std::size_t>(a);
+      const int k = w.act[ia];
+      const ContactKinematics& c = w.cik[static_cast<std::size_t>(k)];
+      const double rN = w.set.r_N(a), rT = w.set.r_T(a);
+      ContactStep& cs = r.contacts[static_cast<std::size_t>(k)];
+      cs.P_N = rN;
+      cs.P_T = rT;
+      cs.F_N = rN / h;
+      cs.F_T = rT / h;
+      cs.phase = rN != 0.0 || rT != 0.0 ? w.set.mode(a) : Phase::Free;
+      if (rN != 0.0 || rT != 0.0) {
+        impulse_free = false;
+        r.contact_work +=
+            rN * (w.WNk[ia].dot(dv_) + 0.5 * (c.b_N + w.bN1k[static_cast<std::size_t>(k)])) +
+            rT * (w.WTk[ia].dot(dv_) + 0.5 * (c.b_T + w.bT1k[static_cast<std::size_t>(k)]));
+      }
+    }
+  }
+  r.a = (v - v_) / h;
+  v_prev_ = v_;
+  q_ = q;
+  v_ = v;
+  prev_impulse_free_ = impulse_free;
+  r.index = ++index_;
+  r.q = q_;
+  r.v = v_;
+  return StepOutcome::Ok;
+}
+
+template <>
+StepOutcome MoreauJean<Eigen::Dynamic, true>::step(double t, StepReport& r, std::string& message) {
+  return step_multi(t, r, message);
+}
+
+std::unique_ptr<Stepper> make_moreau_jean_multi(const LagrangianModel& m,
+                                                const FixedStepOptions& o) {
+  return std::make_unique<MoreauJean<Eigen::Dynamic, true>>(m, o);
+}
+
+}  // namespace rubdyn::detail
