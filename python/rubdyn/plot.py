@@ -394,8 +394,11 @@ def write_all(res, out_dir, dpi=130):
 
     planes = res.planes
     for name, make in FIGURES.items():
-        if planes <= 1 or name == "omega":
+        if planes <= 1:
             save(make(res), name)
+            continue
+        if name == "omega":  # one spin; the phase bands drawn under it are plane 1's
+            save(make(res.plane(1)), name)
             continue
         for k in range(1, planes + 1):
             save(make(res.plane(k)), f"{name}_{k}")

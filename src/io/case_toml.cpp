@@ -975,6 +975,15 @@ class Loader {
       rule(s.c >= 0, "stator.c", s.c, "must be >= 0 (a damping)");
       rule(s.gap > 0, "stator.gap", s.gap, "must be > 0 (the radial clearance g0)");
     }
+    // the solvers that take several contacts (docs/time-steppers.md, 3.1)
+    if (c.params.planes.size() > 1 && c.solver.kind != "mj" && c.solver.kind != "mj-proj") {
+      const toml::node* n = at("solver.kind");
+      issue("solver.kind", n, "\"" + c.solver.kind + "\"",
+            fmt::format("handles one contact; this case has {} [[plane]]s: use \"mj\" or "
+                        "\"mj-proj\" (the event-driven solver and Carpenter's schemes take one "
+                        "plane today)",
+                        c.params.planes.size()));
+    }
     for (std::size_t k = 0; k < c.params.planes.size(); ++k) {
       const PlaneParams& pl = c.params.planes[k];
       const std::string sec = plane_section(k) + ".";
