@@ -29,7 +29,7 @@ namespace detail {
 template <int N, bool Multi>
 StepOutcome MoreauJean<N, Multi>::step(double t, StepReport& r, std::string& message) {
   static_assert(!Multi, "MoreauJean<N, true>::step is moreau_jean_multi.cpp's");
-  const double h = o_.h, th = o_.theta, eta = o_.eta;
+  const double h = o_.h, th = o_.theta;
   m_.smooth_forces(t, q_, v_, fi_);
   m_.compute_contact(0, t, q_, v_, ci_);
   const ContactKinematics& ci = ci_;
@@ -66,22 +66,9 @@ StepOutcome MoreauJean<N, Multi>::step(double t, StepReport& r, std::string& mes
   Phase ph = Phase::Free;
   r.reset();
   for (;;) {
-    q_it_ = q_ + h * ((1.0 - th) * v_ + th * v);
-    qe_ = (1.0 - eta) * q_ + eta * q_it_;
-    m_.smooth_forces(t + h, q_it_, v, f_);
-    dv_ = v - v_;
-    m_.mass_product(qe_, dv_, Phi_);  // M(q_{i+eta}) (v - v_i), structured
-    Phi_ -= h * ((1.0 - th) * fi_ + th * f_);
-    if (newton_.needs_matrix()) {
-      m_.mass_matrix(qe_, M_);
-      m_.smooth_force_jacobians(t + h, q_it_, v, dfdq_, dfdv_);
-      m_.mass_matrix_product_jacobian(qe_, dv_, dMa_);
-      Mt_ = M_ + eta * h * th * dMa_ - h * th * (dfdv_ + h * th * dfdq_);
-      newton_.set_matrix(Mt_);
+    free_velocity(t, v, [&] {
       if (active) delassus();
-    }
-    newton_.apply_inverse(Phi_, vfree_);
-    vfree_ = v - vfree_;
+    });
     V& vn = vn_;
     vn = vfree_;
     rN = rT = 0.0;
@@ -104,22 +91,10 @@ StepOutcome MoreauJean<N, Multi>::step(double t, StepReport& r, std::string& mes
       ph = sol.phase;
       vn = vfree_ + xN_ * rN + xT_ * rT;
     }
-    change_ = vn - v;
-    v = vn;
-    ++r.newton_iters;
-    if (!all_finite(v)) {
-      message = fmt::format("mj: non-finite iterate at t = {:.17g}", t);
-      return StepOutcome::NonFinite;
-    }
-    // scaled change: 1e-14 relative plus 1e-15 m/s (or rad/s)
-    const auto next =
-        newton_.after((change_.array().abs() / (1e-14 * v.array().abs() + 1e-15)).maxCoeff());
-    if (next == SimplifiedNewton<N>::Next::Converged) break;
-    if (next == SimplifiedNewton<N>::Next::Failed) {
-      message = fmt::format("mj: Newton did not converge in {} iterations at t = {:.17g}",
-                            newton_.max_iterations(), t);
-      return StepOutcome::NewtonFailed;
-    }
+    StepOutcome out = StepOutcome::Ok;
+    const Iterate it = accept(t, v, vn, r, out, message);
+    if (it == Iterate::Converged) break;
+    if (it == Iterate::Failed) return out;
   }
   V& q = q_it_;
   q = q_ + h * ((1.0 - th) * v_ + th * v);

@@ -38,7 +38,10 @@ struct MultiWork<N, true> {
         sc(static_cast<std::size_t>(K)),
         Wd(Mat::Zero(2 * K, 2 * K)),
         Xp(Mat::Zero(n, K)),
-        u0(Vec::Zero(2 * K)) {
+        u0(Vec::Zero(2 * K)),
+        rN(static_cast<std::size_t>(K), 0.0),
+        rT(static_cast<std::size_t>(K), 0.0),
+        mode(static_cast<std::size_t>(K), Phase::Free) {
     act.reserve(static_cast<std::size_t>(K));
     pen.reserve(static_cast<std::size_t>(K));
   }
@@ -50,6 +53,8 @@ struct MultiWork<N, true> {
   std::vector<SetContact> sc;
   Mat Wd, Xp;
   Vec u0;
+  std::vector<double> rN, rT;  ///< the active contacts' impulses of the last solve
+  std::vector<Phase> mode;     ///< and their modes
 };
 
 /// N: the model's dofs, fixed (a fast path) or Eigen::Dynamic (simplified_newton.hpp).
@@ -133,6 +138,56 @@ class MoreauJean final : public Stepper {
   ContactKinematics ci_, kin_;
   const int K_;
   MultiWork<N, Multi> mw_;  // the K-contact workspaces (empty for one contact)
+  /// The free velocity of a Newton iterate at v, into vfree_: the residual
+  /// Phi = M(q_eta) (v - v_i) - h [(1 - theta) f_i + theta f_{i+1}], the iteration matrix
+  /// refreshed first when it is due (then `refreshed()`: the step's Delassus matrix depends on
+  /// it), vfree = v - Mt^-1 Phi. Shared by both steps (inlined into each).
+  template <class Refreshed>
+  void free_velocity(double t, const V& v, Refreshed&& refreshed) {
+    const double h = o_.h, th = o_.theta, eta = o_.eta;
+    q_it_ = q_ + h * ((1.0 - th) * v_ + th * v);
+    qe_ = (1.0 - eta) * q_ + eta * q_it_;
+    m_.smooth_forces(t + h, q_it_, v, f_);
+    dv_ = v - v_;
+    m_.mass_product(qe_, dv_, Phi_);  // M(q_{i+eta}) (v - v_i), structured
+    Phi_ -= h * ((1.0 - th) * fi_ + th * f_);
+    if (newton_.needs_matrix()) {
+      m_.mass_matrix(qe_, M_);
+      m_.smooth_force_jacobians(t + h, q_it_, v, dfdq_, dfdv_);
+      m_.mass_matrix_product_jacobian(qe_, dv_, dMa_);
+      Mt_ = M_ + eta * h * th * dMa_ - h * th * (dfdv_ + h * th * dfdq_);
+      newton_.set_matrix(Mt_);
+      refreshed();
+    }
+    newton_.apply_inverse(Phi_, vfree_);
+    vfree_ = v - vfree_;
+  }
+  enum class Iterate { Again, Converged, Failed };
+  /// Takes the Newton iterate vn (v <- vn) and says what follows; on failure `out` and
+  /// `message` say why. Shared by both steps.
+  Iterate accept(double t, V& v, const V& vn, StepReport& r, StepOutcome& out,
+                 std::string& message) {
+    change_ = vn - v;
+    v = vn;
+    ++r.newton_iters;
+    if (!all_finite(v)) {
+      message = fmt::format("mj: non-finite iterate at t = {:.17g}", t);
+      out = StepOutcome::NonFinite;
+      return Iterate::Failed;
+    }
+    // scaled change: 1e-14 relative plus 1e-15 m/s (or rad/s)
+    const auto next =
+        newton_.after((change_.array().abs() / (1e-14 * v.array().abs() + 1e-15)).maxCoeff());
+    if (next == SimplifiedNewton<N>::Next::Converged) return Iterate::Converged;
+    if (next == SimplifiedNewton<N>::Next::Failed) {
+      message = fmt::format("mj: Newton did not converge in {} iterations at t = {:.17g}",
+                            newton_.max_iterations(), t);
+      out = StepOutcome::NewtonFailed;
+      return Iterate::Failed;
+    }
+    return Iterate::Again;
+  }
+
   /// One step of the K-contact path: step() of MoreauJean<N, true> (moreau_jean_multi.cpp).
   /// Multi is a template parameter, not a branch in step(): a branch at its top, or the
   /// K-contact step compiled in the same unit, changed how GCC inlines the one-contact step's
