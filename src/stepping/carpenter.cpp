@@ -19,6 +19,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <cmath>
+#include <vector>
 
 #include "rubdyn/stepping/stepper.hpp"
 #include "simplified_newton.hpp"
@@ -27,8 +28,39 @@ namespace rubdyn {
 
 namespace {
 
-/// N: the model's dofs, fixed (a fast path) or Eigen::Dynamic (simplified_newton.hpp).
+/// The K-contact workspaces of Carpenter<N, true> (docs/time-steppers.md, 3.1): each contact's
+/// kinematics at the prediction, the penetrating contacts' correction directions C_NT,k and
+/// M-bar^-1 C_NT,k, and the forces found. Empty for one contact.
+template <int N, bool Multi>
+struct CarpMulti {
+  CarpMulti(int /*n*/, int /*K*/) {}
+};
 template <int N>
+struct CarpMulti<N, true> {
+  using V = detail::SVec<N>;
+  CarpMulti(int n, int K)
+      : kin(static_cast<std::size_t>(K), ContactKinematics(n)),
+        C(static_cast<std::size_t>(K), V::Zero(n)),
+        X(static_cast<std::size_t>(K), V::Zero(n)),
+        s(static_cast<std::size_t>(K), 0.0),
+        FN(static_cast<std::size_t>(K), 0.0),
+        FT(static_cast<std::size_t>(K), 0.0),
+        vN0(static_cast<std::size_t>(K), 0.0),
+        phase(static_cast<std::size_t>(K), Phase::Free) {
+    pen.reserve(static_cast<std::size_t>(K));
+    act.reserve(static_cast<std::size_t>(K));
+  }
+  std::vector<ContactKinematics> kin;
+  std::vector<V> C, X;
+  std::vector<double> s, FN, FT, vN0;
+  std::vector<Phase> phase;
+  std::vector<int> pen, act;  // penetrating contacts; those kept by the active-set loop
+};
+
+/// N: the model's dofs, fixed (a fast path) or Eigen::Dynamic (simplified_newton.hpp). Multi:
+/// several contacts (a class instance of its own, so that the one-contact step is compiled as
+/// before).
+template <int N, bool Multi = false>
 class Carpenter final : public Stepper {
   using V = detail::SVec<N>;
   using M = detail::SMat<N>;
@@ -62,7 +94,9 @@ class Carpenter final : public Stepper {
         x_(V::Zero(n_)),
         dx_(V::Zero(n_)),
         lu_(n_),
-        kin_(n_) {}
+        kin_(n_),
+        K_(m.contact_count()),
+        mw_(n_, K_) {}
 
   std::string_view name() const override { return qn_ ? "carp-qn" : "carp-onevc"; }
   std::string options_json() const override {
@@ -114,10 +148,18 @@ class Carpenter final : public Stepper {
   V f_, d_, dn_, R_, w_, vc_, qp_, step_, CNT_, x_, dx_;
   Eigen::PartialPivLU<M> lu_;
   ContactKinematics kin_;
+  const int K_;
+  CarpMulti<N, Multi> mw_;
+  /// Multi: the correction of dd for every contact that the prediction penetrates, jointly
+  /// (docs/time-steppers.md, 3.1); kin_ready: mw_.kin holds the prediction's kinematics.
+  template <class SolveMbar>
+  void correct_multi(V& dd, const SolveMbar& solve_mbar, bool kin_ready = false);
+  /// Multi: the kinematics of every contact at the prediction q_i + dd; true if one penetrates.
+  bool predict_contacts(const V& dd);
 };
 
-template <int N>
-void Carpenter<N>::residual(double t, const V& d, bool with_jacobians) {
+template <int N, bool Multi>
+void Carpenter<N, Multi>::residual(double t, const V& d, bool with_jacobians) {
   const double h = o_.h, h2 = h * h;
   vc_ = (d + dq_prev_) / (2.0 * h);
   m_.smooth_forces(t, q_, vc_, f_);
@@ -133,10 +175,10 @@ void Carpenter<N>::residual(double t, const V& d, bool with_jacobians) {
   }
 }
 
-template <int N>
+template <int N, bool Multi>
 template <class SolveMbar>
-void Carpenter<N>::correct(V& dd, const SolveMbar& solve_mbar, double& FN, double& FT, Phase& ph,
-                           bool kin_ready) {
+void Carpenter<N, Multi>::correct(V& dd, const SolveMbar& solve_mbar, double& FN, double& FT,
+                                  Phase& ph, bool kin_ready) {
   const double h = o_.h;
   if (!kin_ready) {
     qp_ = q_ + dd;
@@ -163,10 +205,89 @@ void Carpenter<N>::correct(V& dd, const SolveMbar& solve_mbar, double& FN, doubl
   ph = s < 0.0 ? Phase::SlipNeg : Phase::SlipPos;
 }
 
-template <int N>
-StepOutcome Carpenter<N>::step(double t, StepReport& r, std::string& message) {
+template <int N, bool Multi>
+bool Carpenter<N, Multi>::predict_contacts(const V& dd) {
+  qp_ = q_ + dd;
+  vc_ = (dd + dq_prev_) / (2.0 * o_.h);
+  bool any = false;
+  for (int k = 0; k < K_; ++k) {
+    ContactKinematics& c = mw_.kin[static_cast<std::size_t>(k)];
+    m_.compute_contact(k, 0.0, qp_, vc_, c);
+    any = any || c.d_N < 0.0;
+  }
+  return any;
+}
+
+template <int N, bool Multi>
+template <class SolveMbar>
+void Carpenter<N, Multi>::correct_multi(V& dd, const SolveMbar& solve_mbar, bool kin_ready) {
+  // One multiplier per penetrating contact along its C_NT,k = W_N,k - mu_k s_k W_T,k (s_k the
+  // sign of its slip at the prediction), all found together: d_N,j(q^p) + sum_k W_N,j^T
+  // M-bar^-1 C_NT,k F_k = 0 over the set; a contact whose F comes out negative leaves the set
+  // (the most negative first) and the rest is solved again.
+  auto& w = mw_;
+  if (!kin_ready) predict_contacts(dd);
+  w.pen.clear();
+  for (int k = 0; k < K_; ++k) {
+    const auto ik = static_cast<std::size_t>(k);
+    w.FN[ik] = w.FT[ik] = 0.0;
+    w.phase[ik] = Phase::Free;
+    if (w.kin[ik].d_N < 0.0) w.pen.push_back(k);
+  }
+  if (w.pen.empty()) return;
+  for (const int k : w.pen) {
+    const auto ik = static_cast<std::size_t>(k);
+    const ContactKinematics& c = w.kin[ik];
+    const double mu = m_.contact_law(k).mu;
+    w.s[ik] = mu > 0.0 ? (c.v_t > 0.0 ? 1.0 : (c.v_t < 0.0 ? -1.0 : 0.0)) : 0.0;
+    w.C[ik] = c.W_N - mu * w.s[ik] * c.W_T;
+    solve_mbar(w.C[ik], w.X[ik]);
+  }
+  w.act.assign(w.pen.begin(), w.pen.end());
+  while (!w.act.empty()) {
+    const auto m = static_cast<Eigen::Index>(w.act.size());
+    detail::SmallMat G(m, m);
+    detail::SmallVec F(m);
+    for (Eigen::Index a = 0; a < m; ++a) {
+      const ContactKinematics& ca =
+          w.kin[static_cast<std::size_t>(w.act[static_cast<std::size_t>(a)])];
+      F[a] = -ca.d_N;
+      for (Eigen::Index b = 0; b < m; ++b)
+        G(a, b) = ca.W_N.dot(w.X[static_cast<std::size_t>(w.act[static_cast<std::size_t>(b)])]);
+    }
+    if (!detail::solve_small(G, F)) break;  // singular: reported below
+    Eigen::Index worst = -1;
+    for (Eigen::Index a = 0; a < m; ++a)
+      if (F[a] < 0.0 && (worst < 0 || F[a] < F[worst])) worst = a;
+    if (worst < 0) {
+      for (Eigen::Index a = 0; a < m; ++a) {
+        const auto k = static_cast<std::size_t>(w.act[static_cast<std::size_t>(a)]);
+        const double mu = m_.contact_law(static_cast<int>(k)).mu;
+        w.FN[k] = F[a];
+        w.FT[k] = -mu * w.s[k] * F[a];
+        w.phase[k] = w.s[k] < 0.0 ? Phase::SlipNeg : Phase::SlipPos;
+        dd += w.X[k] * F[a];
+      }
+      return;
+    }
+    w.act.erase(w.act.begin() + worst);
+  }
+  // no set of the penetrating contacts closes with forces >= 0: as for one contact, the
+  // scheme's sliding correction is ill-posed here (Painleve-type)
+  painleve_ = true;
+}
+
+template <int N, bool Multi>
+StepOutcome Carpenter<N, Multi>::step(double t, StepReport& r, std::string& message) {
   const double h = o_.h, h2 = h * h;
-  m_.compute_contact(0, t, q_, v_, kin_);
+  if constexpr (Multi) {
+    for (int k = 0; k < K_; ++k) {
+      m_.compute_contact(k, t, q_, v_, kin_);
+      mw_.vN0[static_cast<std::size_t>(k)] = kin_.v_N;
+    }
+  } else {
+    m_.compute_contact(0, t, q_, v_, kin_);
+  }
   const double v_N_start = kin_.v_N;
   // Algorithm 1's contactless first guess: linear spin acceleration.
   V& d = d_;
@@ -203,10 +324,16 @@ StepOutcome Carpenter<N>::step(double t, StepReport& r, std::string& message) {
     }
     // Verification, and the correction with M-bar at the predicted spin (Algorithm 1) only
     // when the prediction penetrates.
-    qp_ = q_ + d;
-    vc_ = (d + dq_prev_) / (2.0 * h);
-    m_.compute_contact(0, t, qp_, vc_, kin_);
-    if (kin_.d_N < 0.0) {
+    bool penetrates = false;
+    if constexpr (Multi) {
+      penetrates = predict_contacts(d);
+    } else {
+      qp_ = q_ + d;
+      vc_ = (d + dq_prev_) / (2.0 * h);
+      m_.compute_contact(0, t, qp_, vc_, kin_);
+      penetrates = kin_.d_N < 0.0;
+    }
+    if (penetrates) {
       residual(t, d, true);  // (kin_ stays: residual does not touch it)
       // M-bar differs from the prediction Jacobian only in the spin column (by G v / 2h, ~1e-7
       // of M / h^2 here): solve with M-bar by Richardson iteration preconditioned with the
@@ -221,7 +348,11 @@ StepOutcome Carpenter<N>::step(double t, StepReport& r, std::string& message) {
           if (dx_.norm() <= 1e-15 * x.norm()) break;
         }
       };
-      correct(d, solve_mbar, FN, FT, ph, true);
+      if constexpr (Multi) {
+        correct_multi(d, solve_mbar, true);
+      } else {
+        correct(d, solve_mbar, FN, FT, ph, true);
+      }
     }
   } else {
     // Quasi-Newton loop (Roques et al. 2010): prediction (one solve with M-bar at the current
@@ -234,8 +365,12 @@ StepOutcome Carpenter<N>::step(double t, StepReport& r, std::string& message) {
       // (exact in one solve, R being affine in Delta at fixed spin) and corrects it
       step_ = lu_.solve(R_);
       dn_ = d - step_;
-      correct(
-          dn_, [this](const V& b, V& x) { x = lu_.solve(b); }, FN, FT, ph);
+      auto solve_mbar = [this](const V& b, V& x) { x = lu_.solve(b); };
+      if constexpr (Multi) {
+        correct_multi(dn_, solve_mbar);
+      } else {
+        correct(dn_, solve_mbar, FN, FT, ph);
+      }
       step_ = dn_ - d;  // the change of the iterate
       d = dn_;
       ++r.newton_iters;
@@ -248,10 +383,19 @@ StepOutcome Carpenter<N>::step(double t, StepReport& r, std::string& message) {
     r.unconverged = it == o_.itmax;
   }
   if (painleve_) {
-    message = fmt::format(
-        "{} at t = {:.17g}: C_N^T M-bar^-1 C_NT <= 0, the correction would need F_N < 0 "
-        "(sliding friction mu = {} is ill-posed for the scheme here)",
-        name(), t, law_.mu);
+    if constexpr (Multi) {
+      std::string who;
+      for (const int k : mw_.pen) who += fmt::format("{}{}", who.empty() ? "" : ", ", k + 1);
+      message = fmt::format(
+          "{} at t = {:.17g}: no set of the penetrating contacts ({}) closes with forces >= 0 "
+          "along C_NT (the sliding correction is ill-posed for the scheme here)",
+          name(), t, who);
+    } else {
+      message = fmt::format(
+          "{} at t = {:.17g}: C_N^T M-bar^-1 C_NT <= 0, the correction would need F_N < 0 "
+          "(sliding friction mu = {} is ill-posed for the scheme here)",
+          name(), t, law_.mu);
+    }
     return StepOutcome::Painleve;
   }
   if (!all_finite(d)) {
@@ -269,7 +413,22 @@ StepOutcome Carpenter<N>::step(double t, StepReport& r, std::string& message) {
   r.P_T = FT * h;
   r.phase = ph;
   r.v_N_before = v_N_start;
-  if (FN != 0.0) {
+  if constexpr (Multi) {
+    for (int k = 0; k < K_; ++k) {
+      const auto ik = static_cast<std::size_t>(k);
+      ContactStep& cs = r.contacts[ik];
+      cs.F_N = mw_.FN[ik];
+      cs.F_T = mw_.FT[ik];
+      cs.P_N = mw_.FN[ik] * h;
+      cs.P_T = mw_.FT[ik] * h;
+      cs.phase = mw_.phase[ik];
+      cs.v_N_before = mw_.vN0[ik];
+      if (mw_.FN[ik] != 0.0) {
+        m_.compute_contact(k, t, q_, v_, kin_);
+        r.contact_work += (mw_.FN[ik] * kin_.v_N + mw_.FT[ik] * kin_.v_t) * h;
+      }
+    }
+  } else if (FN != 0.0) {
     m_.compute_contact(0, t, q_, v_, kin_);
     r.contact_work = (FN * kin_.v_N + FT * kin_.v_t) * h;
   }
@@ -286,6 +445,11 @@ StepOutcome Carpenter<N>::step(double t, StepReport& r, std::string& message) {
 }  // namespace
 
 std::unique_ptr<Stepper> make_carpenter(const LagrangianModel& m, const FixedStepOptions& opt) {
+  if (m.contact_count() > detail::kMaxSmall)
+    throw std::invalid_argument(fmt::format("{}: at most {} contacts; model '{}' has {}",
+                                            to_string(opt.scheme), detail::kMaxSmall, m.name(),
+                                            m.contact_count()));
+  if (m.contact_count() > 1) return std::make_unique<Carpenter<Eigen::Dynamic, true>>(m, opt);
   if (m.num_dofs() == 7) return std::make_unique<Carpenter<7>>(m, opt);  // the rigid rotor
   return std::make_unique<Carpenter<Eigen::Dynamic>>(m, opt);
 }

@@ -49,13 +49,9 @@ std::unique_ptr<Stepper> make_stepper(const LagrangianModel& m, const FixedStepO
   if (!(std::isfinite(opt.h) && opt.h > 0.0))
     throw std::invalid_argument(fmt::format("fixed-step scheme {}: h = {} must be finite and > 0",
                                             to_string(opt.scheme), opt.h));
-  const bool carpenter =
-      opt.scheme == FixedStepScheme::CarpOneVC || opt.scheme == FixedStepScheme::CarpQN;
-  if (m.contact_count() < 1 || (carpenter && m.contact_count() != 1))
-    throw std::invalid_argument(fmt::format(
-        "fixed-step scheme {}: handles {}; model '{}' has {} contacts", to_string(opt.scheme),
-        carpenter ? "one contact (mj and mj-proj handle several)" : "one or more contacts",
-        m.name(), m.contact_count()));
+  if (m.contact_count() < 1)
+    throw std::invalid_argument(fmt::format("fixed-step scheme {}: model '{}' has no contact",
+                                            to_string(opt.scheme), m.name()));
   switch (opt.scheme) {
     case FixedStepScheme::CarpOneVC:
     case FixedStepScheme::CarpQN: return make_carpenter(m, opt);

@@ -71,6 +71,37 @@ inline bool invert_in_place(Mat& a, Mat& inv) {
   return true;
 }
 
+/// The largest system solve_small takes (the contacts of one step: K <= 16).
+constexpr int kMaxSmall = 16;
+/// Solves G x = b in place (m x m, partial pivoting) for the small systems of the K-contact
+/// corrections of the fixed-step schemes (m <= kMaxSmall): false when G is singular.
+using SmallMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxSmall, kMaxSmall>;
+using SmallVec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxSmall, 1>;
+inline bool solve_small(SmallMat& G, SmallVec& b) {
+  const Eigen::Index m = G.rows();
+  for (Eigen::Index k = 0; k < m; ++k) {
+    Eigen::Index p = k;
+    for (Eigen::Index i = k + 1; i < m; ++i)
+      if (std::abs(G(i, k)) > std::abs(G(p, k))) p = i;
+    if (G(p, k) == 0.0) return false;
+    if (p != k) {
+      G.row(p).swap(G.row(k));
+      std::swap(b[p], b[k]);
+    }
+    for (Eigen::Index i = k + 1; i < m; ++i) {
+      const double f = G(i, k) / G(k, k);
+      for (Eigen::Index j = k; j < m; ++j) G(i, j) -= f * G(k, j);
+      b[i] -= f * b[k];
+    }
+  }
+  for (Eigen::Index k = m - 1; k >= 0; --k) {
+    double x = b[k];
+    for (Eigen::Index j = k + 1; j < m; ++j) x -= G(k, j) * b[j];
+    b[k] = x / G(k, k);
+  }
+  return true;
+}
+
 template <int N>
 class SimplifiedNewton {
  public:
