@@ -12,8 +12,7 @@
 #include "rubdyn/stepping/fixed_step.hpp"
 
 using namespace rubdyn;
-using rubdyn::testing::NullSink;
-using rubdyn::testing::same_allocations;
+using namespace rubdyn::testing;
 
 namespace {
 
@@ -40,10 +39,6 @@ MatrixParams paper_matrices(double g) {
   return p;
 }
 
-const FixedStepScheme kSchemes[] = {FixedStepScheme::CarpOneVC, FixedStepScheme::CarpQN,
-                                    FixedStepScheme::MoreauJean,
-                                    FixedStepScheme::MoreauJeanProjected};
-
 }  // namespace
 
 TEST_CASE("No allocation per step: the matrices model at rest on the stator and spinning free",
@@ -58,54 +53,19 @@ TEST_CASE("No allocation per step: the matrices model at rest on the stator and 
   s0.q[1] = -(1 - nu) * mg / 5e6;
   s0.q[6] = -nu * mg / 2e6;
   s0.q[3] = s0.q[6] - 2e-4;
-  for (auto formulation : {ContactFormulation::Reduced, ContactFormulation::Projection}) {
-    same_allocations(
-        [&](double t) {
-          NullSink sink;
-          EventDrivenOptions o;
-          o.contact_phases = formulation;
-          return run_event_driven(rest, s0, t, o, sink);
-        },
-        0.01, 0.02);
-  }
+  for (auto formulation : {ContactFormulation::Reduced, ContactFormulation::Projection})
+    event_allocations(rest, s0, event_options(1e-4, formulation), 0.01, 0.02);
   // (mj-proj leaves and re-enters this resting contact at round-off, 553 events in 10 ms, with
   // as many allocations either way; it is counted in free flight below)
-  for (auto scheme :
-       {FixedStepScheme::CarpOneVC, FixedStepScheme::CarpQN, FixedStepScheme::MoreauJean}) {
-    INFO(to_string(scheme));
-    same_allocations(
-        [&](double t) {
-          NullSink sink;
-          FixedStepOptions o;
-          o.scheme = scheme;
-          o.h = 1e-5;
-          return run_fixed_step(rest, s0, t, o, sink);
-        },
-        0.01, 0.02);
-  }
+  fixed_step_allocations(
+      rest, s0, {FixedStepScheme::CarpOneVC, FixedStepScheme::CarpQN, FixedStepScheme::MoreauJean},
+      step_options(1e-5), 0.01, 0.02);
   // (2) no weight, spinning at 2000 rad/s with a small unbalance at the node: free flight
   MatrixParams q = paper_matrices(0.0);
   q.loads.unbalance = 1e-6;
   const MatrixModel spin(q);
   MechanicalState s1(spin.num_dofs());
   s1.v[4] = 2000.0;
-  same_allocations(
-      [&](double t) {
-        NullSink sink;
-        EventDrivenOptions o;
-        return run_event_driven(spin, s1, t, o, sink);
-      },
-      0.01, 0.02);
-  for (auto scheme : kSchemes) {
-    INFO(to_string(scheme));
-    same_allocations(
-        [&](double t) {
-          NullSink sink;
-          FixedStepOptions o;
-          o.scheme = scheme;
-          o.h = 1e-5;
-          return run_fixed_step(spin, s1, t, o, sink);
-        },
-        0.01, 0.02);
-  }
+  event_allocations(spin, s1, event_options(), 0.01, 0.02);
+  fixed_step_allocations(spin, s1, kEveryScheme, step_options(1e-5), 0.01, 0.02);
 }

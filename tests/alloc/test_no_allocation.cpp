@@ -18,16 +18,7 @@
 #include "support/problems.hpp"
 
 using namespace rubdyn;
-using rubdyn::testing::NullSink;
-using rubdyn::testing::same_allocations;
-
-namespace {
-
-const FixedStepScheme kSchemes[] = {FixedStepScheme::CarpOneVC, FixedStepScheme::CarpQN,
-                                    FixedStepScheme::MoreauJean,
-                                    FixedStepScheme::MoreauJeanProjected};
-
-}  // namespace
+using namespace rubdyn::testing;
 
 TEST_CASE("No allocation per step: the rigid rotor in free flight, every solver", "[alloc]") {
   RotorStatorParams p;
@@ -35,26 +26,8 @@ TEST_CASE("No allocation per step: the rigid rotor in free flight, every solver"
   const RotorStatorModel model(p);
   MechanicalState s0(RotorStatorModel::kDofs);
   s0.v[TH] = 2000.0;
-  same_allocations(
-      [&](double t) {
-        NullSink sink;
-        EventDrivenOptions o;
-        o.output_dt = 1e-4;
-        return run_event_driven(model, s0, t, o, sink);
-      },
-      0.01, 0.02);
-  for (auto scheme : kSchemes) {
-    INFO(to_string(scheme));
-    same_allocations(
-        [&](double t) {
-          NullSink sink;
-          FixedStepOptions o;
-          o.scheme = scheme;
-          o.h = 1e-5;
-          return run_fixed_step(model, s0, t, o, sink);
-        },
-        0.01, 0.02);
-  }
+  event_allocations(model, s0, event_options(), 0.01, 0.02);
+  fixed_step_allocations(model, s0, kEveryScheme, step_options(1e-5), 0.01, 0.02);
 }
 
 TEST_CASE("No allocation per step: the rigid rotor in permanent contact, every solver", "[alloc]") {
@@ -69,28 +42,9 @@ TEST_CASE("No allocation per step: the rigid rotor in permanent contact, every s
   s0.q[YB] = -(1 - nu) * mg / p.bearing.k;
   s0.q[YS] = -nu * mg / p.stator.k;
   s0.q[YR] = s0.q[YS] - p.stator.gap;
-  for (auto formulation : {ContactFormulation::Reduced, ContactFormulation::Projection}) {
-    same_allocations(
-        [&](double t) {
-          NullSink sink;
-          EventDrivenOptions o;
-          o.contact_phases = formulation;
-          return run_event_driven(model, s0, t, o, sink);
-        },
-        0.01, 0.02);
-  }
-  for (auto scheme : kSchemes) {
-    INFO(to_string(scheme));
-    same_allocations(
-        [&](double t) {
-          NullSink sink;
-          FixedStepOptions o;
-          o.scheme = scheme;
-          o.h = 1e-5;
-          return run_fixed_step(model, s0, t, o, sink);
-        },
-        0.01, 0.02);
-  }
+  for (auto formulation : {ContactFormulation::Reduced, ContactFormulation::Projection})
+    event_allocations(model, s0, event_options(1e-4, formulation), 0.01, 0.02);
+  fixed_step_allocations(model, s0, kEveryScheme, step_options(1e-5), 0.01, 0.02);
 }
 
 TEST_CASE("No allocation per step: a 2-dof model (dynamic sizes) sliding, then sticking",
@@ -99,26 +53,11 @@ TEST_CASE("No allocation per step: a 2-dof model (dynamic sizes) sliding, then s
   const rubdyn::testing::BlockOnBelt model(0.5, 100.0, 1.0, 0.2);
   const double t1 = model.stick_time(), t2 = model.slip_time();
   REQUIRE(t2 > t1 + 0.02);
-  auto event = [&](double t) {
-    NullSink sink;
-    EventDrivenOptions o;
-    o.output_dt = 1e-3;
-    return run_event_driven(model, model.initial(), t, o, sink);
-  };
-  same_allocations(event, t1 / 3.0, 2.0 * t1 / 3.0);  // sliding
-  same_allocations(event, t1 + 0.01, t1 + 0.02);      // sticking (after the one stick event)
-  for (auto scheme : kSchemes) {
-    INFO(to_string(scheme));
-    auto fixed = [&](double t) {
-      NullSink sink;
-      FixedStepOptions o;
-      o.scheme = scheme;
-      o.h = 1e-5;
-      o.output_dt = 1e-3;
-      return run_fixed_step(model, model.initial(), t, o, sink);
-    };
-    same_allocations(fixed, 0.01, 0.02);
-  }
+  event_allocations(model, model.initial(), event_options(1e-3), t1 / 3.0, 2.0 * t1 / 3.0);
+  // sticking (after the one stick event)
+  event_allocations(model, model.initial(), event_options(1e-3), t1 + 0.01, t1 + 0.02);
+  fixed_step_allocations(model, model.initial(), kEveryScheme, step_options(1e-5, 1e-3), 0.01,
+                         0.02);
 }
 
 TEST_CASE("No allocation per step: the Jeffcott rotor rolling, and spun at a prescribed speed",
@@ -128,25 +67,11 @@ TEST_CASE("No allocation per step: the Jeffcott rotor rolling, and spun at a pre
   const CaseSpec rolling = parse_case(rubdyn::testing::SteadyRoll::text(), "alloc");
   const auto roll = build_model(rolling);
   const MechanicalState r0 = initial_state(rolling);
-  same_allocations(
-      [&](double t) {
-        NullSink sink;
-        EventDrivenOptions o;
-        return run_event_driven(*roll, r0, t, o, sink);
-      },
-      0.01, 0.02);
-  for (auto scheme : {FixedStepScheme::MoreauJean, FixedStepScheme::MoreauJeanProjected}) {
-    INFO(to_string(scheme));  // (Carpenter's correction has sliding friction only: no roll)
-    same_allocations(
-        [&](double t) {
-          NullSink sink;
-          FixedStepOptions o;
-          o.scheme = scheme;
-          o.h = 1e-6;
-          return run_fixed_step(*roll, r0, t, o, sink);
-        },
-        0.002, 0.004);
-  }
+  event_allocations(*roll, r0, event_options(), 0.01, 0.02);
+  // (Carpenter's correction has sliding friction only: no roll)
+  fixed_step_allocations(*roll, r0,
+                         {FixedStepScheme::MoreauJean, FixedStepScheme::MoreauJeanProjected},
+                         step_options(1e-6), 0.002, 0.004);
   // (2) an unbalance whirling freely at a prescribed 800 rad/s (the wrapper without its spin
   // coordinate, the drive torque an observable), sprung stator: free flight
   const CaseSpec spinning =
@@ -156,23 +81,6 @@ TEST_CASE("No allocation per step: the Jeffcott rotor rolling, and spun at a pre
                  "alloc");
   const auto spun = build_model(spinning);
   const MechanicalState s0 = initial_state(spinning);
-  same_allocations(
-      [&](double t) {
-        NullSink sink;
-        EventDrivenOptions o;
-        return run_event_driven(*spun, s0, t, o, sink);
-      },
-      0.01, 0.02);
-  for (auto scheme : kSchemes) {
-    INFO(to_string(scheme));
-    same_allocations(
-        [&](double t) {
-          NullSink sink;
-          FixedStepOptions o;
-          o.scheme = scheme;
-          o.h = 1e-5;
-          return run_fixed_step(*spun, s0, t, o, sink);
-        },
-        0.01, 0.02);
-  }
+  event_allocations(*spun, s0, event_options(), 0.01, 0.02);
+  fixed_step_allocations(*spun, s0, kEveryScheme, step_options(1e-5), 0.01, 0.02);
 }
