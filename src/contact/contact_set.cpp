@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "rubdyn/contact/min_norm.hpp"
 #include "rubdyn/core/demand.hpp"
 
 namespace rubdyn {
@@ -232,7 +233,21 @@ EnumResult ContactSetSolver::EnumWork::run(MatIn W, VecIn u0, std::span<const Se
       rhs[e] = -u0(row[e]);
     }
     double kappa = 1.0;
-    if (!solve_full_pivot(a, rhs, m, x, kappa)) continue;  // ill-posed: not a candidate
+    CapMat<kCapRows> A0(m, m);  // the system before elimination (for a singular one)
+    CapVec<kCapRows> b0(m);
+    for (int e = 0; e < m; ++e) {
+      b0[e] = rhs[e];
+      for (int k = 0; k < m; ++k) A0(e, k) = a[e][k];
+    }
+    if (!solve_full_pivot(a, rhs, m, x, kappa)) {
+      // singular: redundant contacts (their forces indeterminate) are a candidate with the
+      // minimum-norm forces when the system is consistent; otherwise ill-posed, no candidate
+      CapVec<kCapRows> xm;
+      const MinNormResult mn = min_norm_solve<kCapRows>(A0, b0, xm, kSingularPivot);
+      if (!mn.consistent) continue;
+      for (int k = 0; k < m; ++k) x[k] = xm[k];
+      kappa = mn.kappa;
+    }
     ++out.n_candidates;
     double r[kCapRows] = {}, u[kCapRows];
     for (int k = 0; k < m; ++k) {

@@ -19,6 +19,7 @@
 #include <stdexcept>
 
 #include "event_locator.hpp"
+#include "event_multi.hpp"
 #include "mode_switching.hpp"
 #include "phase_system.hpp"
 #include "rubdyn/core/run_envelope.hpp"
@@ -625,10 +626,12 @@ RunSummary run_event_driven(const LagrangianModel& model, const MechanicalState&
     for (const auto& b : bad) text += fmt::format("\n  {} = {}: {}", b.option, b.value, b.rule);
     throw std::invalid_argument(text);
   }
-  if (model.contact_count() != 1)
+  if (model.contact_count() < 1)
     throw std::invalid_argument(
-        fmt::format("the event-driven solver handles one contact; model '{}' has {}", model.name(),
-                    model.contact_count()));
+        fmt::format("the event-driven solver needs a contact; model '{}' has none", model.name()));
+  // several contacts: their own integrator (event_multi.hpp); one contact runs this one, as before
+  if (model.contact_count() > 1)
+    return detail::run_event_driven_multi(model, initial, t_end, opt, sink);
   Integrator integ(model, opt, sink);
   return integ.run(initial, t_end);
 }

@@ -975,15 +975,6 @@ class Loader {
       rule(s.c >= 0, "stator.c", s.c, "must be >= 0 (a damping)");
       rule(s.gap > 0, "stator.gap", s.gap, "must be > 0 (the radial clearance g0)");
     }
-    // the solvers that take several contacts (docs/time-steppers.md, 3.1)
-    if (c.params.planes.size() > 1 && c.solver.kind == "event") {
-      const toml::node* n = at("solver.kind");
-      issue("solver.kind", n, "\"" + c.solver.kind + "\"",
-            fmt::format("handles one contact; this case has {} [[plane]]s: use a fixed-step "
-                        "scheme (\"mj\", \"mj-proj\", \"carp-onevc\", \"carp-qn\"; the "
-                        "event-driven solver takes one plane today)",
-                        c.params.planes.size()));
-    }
     for (std::size_t k = 0; k < c.params.planes.size(); ++k) {
       const PlaneParams& pl = c.params.planes[k];
       const std::string sec = plane_section(k) + ".";

@@ -478,8 +478,11 @@ TEST_CASE("The solver asks the model for its spin coordinate and its number of c
   REQUIRE(s.complete());
   CHECK(s.omega_max == 0.0);
   CHECK(std::isnan(s.t_omega_lim));
-  // more than one contact is refused, not silently reduced to one
-  CHECK_THROWS_AS(run_event_driven(rubdyn::testing::FreeFall(2), s0, 0.1, opt, sink),
+  // a model without a contact, or with more than the K-contact integrator takes (8), is
+  // refused, not silently reduced
+  CHECK_THROWS_AS(run_event_driven(rubdyn::testing::FreeFall(0), s0, 0.1, opt, sink),
+                  std::invalid_argument);
+  CHECK_THROWS_AS(run_event_driven(rubdyn::testing::FreeFall(9), s0, 0.1, opt, sink),
                   std::invalid_argument);
 }
 

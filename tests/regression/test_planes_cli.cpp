@@ -1,6 +1,5 @@
-// The two-plane rotor through the command line: run (every fixed-step scheme), analyze (every
-// plane's files and verdicts), check, and the event-driven solver, which takes one plane,
-// refused by the case's rules (exit 2, naming solver.kind).
+// The two-plane rotor through the command line: run (every solver), analyze (every plane's files
+// and verdicts), check.
 #include <catch2/catch.hpp>
 #include <filesystem>
 
@@ -31,11 +30,15 @@ TEST_CASE("CLI: a two-plane case runs, and analyze writes every plane", "[regres
   o = cli("check " + c);
   CHECK(o.code == 0);
   CHECK(has(o.out, "rub planes"));
-  // the event-driven solver takes one plane: refused by the case's rules, before any output
-  o = cli("check " + c + " --set solver.kind=event");
-  CHECK(o.code == 2);
-  CHECK(has(o.err, "solver.kind"));
-  CHECK(has(o.err, "2 [[plane]]s"));
+  // the event-driven solver runs it too: both planes' events, each with its contact number
+  o = cli("run " + c + " --t-end 0.012 --quiet --solver event --out " +
+          sh((out / "event").string()));
+  CHECK(o.code == 0);
+  const std::string ev = slurp(out / "event" / "events.csv");
+  CHECK(has(ev, "impact"));
+  CHECK(has(ev, ",1\n"));  // the contact column (1-based), last on each row
+  CHECK(has(ev, ",2\n"));
+  CHECK(has(slurp(out / "event" / "summary.json"), "\"contacts\": 2"));
   // every fixed-step scheme runs it
   for (const char* kind : {"mj-proj", "carp-onevc", "carp-qn"}) {
     o = cli("run " + c + " --t-end 0.008 --quiet --solver " + kind + " --out " +
