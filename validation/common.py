@@ -37,7 +37,8 @@ def read_output(folder, dt=1e-4, last=False):
         t = float(r["t"])
         k = round(t / dt)
         if abs(t - k * dt) < 1e-9 and (last or k not in grid):
-            grid[k] = {c: float(v) for c, v in r.items() if c != "phase"}
+            grid[k] = {c: float(v) for c, v in r.items()
+                       if c != "phase" and not c.startswith("phase_")}
     events = [(float(r["t"]), r["kind"]) for r in read_rows(os.path.join(folder, "events.csv"))]
     return summary, grid, events
 

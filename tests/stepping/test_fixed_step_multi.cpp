@@ -16,6 +16,7 @@
 #include "rubdyn/stepping/fixed_step.hpp"
 #include "support/multi_problems.hpp"
 #include "support/problems.hpp"
+#include "support/split_ring.hpp"
 
 using namespace rubdyn;
 using namespace rubdyn::testing;
@@ -174,21 +175,9 @@ TEST_CASE("Fixed-step schemes with K contacts: the two-plane rotor closes its en
 
 TEST_CASE("mj with K contacts: two identical rings at one plane are the one ring (redundant)",
           "[stepping][multi]") {
-  // The reference rotor with its ring split into two identical half rings at the same plane
-  // (half the mass, spring and damper each, the same gap and law): every impact hits both at
-  // the same instant, and the two contacts are redundant (equal rows of the Delassus matrix:
-  // the motion is determinate, the split of the force between them is not). The run must be
-  // the one-ring run; the set solver's tie rule picks one split of the force.
-  std::ifstream f(RUBDYN_SOURCE_DIR "/cases/reference.toml");
-  std::string s{std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
-  s.erase(s.find("radius = 0.05"),
-          s.find('\n', s.find("radius = 0.05")) + 1 - s.find("radius = 0.05"));
-  const std::string half =
-      "[[plane]]\nposition = 0.4\nradius = 0.05\ngap = 2.0e-4\nmu = 0.1\nstator_mass = 1.0\n"
-      "stator_k = 1.0e6\nstator_c = 50.0\n\n";
-  s.replace(s.find("[stator]"), s.find("[loads]") - s.find("[stator]"), half + half);
-  const CaseSpec two =
-      parse_case(s, "split.toml", {"solver.kind=mj"});  // (the event solver takes one plane)
+  // tests/support/split_ring.hpp: the run must be the one-ring run; the set solver's tie rule
+  // picks one split of the force
+  const CaseSpec two = parse_case(split_ring_case_text(), "split.toml", {"solver.kind=mj"});
   const CaseSpec one = load_case(RUBDYN_SOURCE_DIR "/cases/reference.toml");
   const auto m2 = build_model(two), m1 = build_model(one);
   for (const auto scheme : kMj) {

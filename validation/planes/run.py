@@ -1,0 +1,221 @@
+#!/usr/bin/python3
+"""Several rub planes: the event-driven integrator with K contacts measured on cases/two-plane.toml
+and on stress scenes. Writes table.md and results.csv next to this script.
+
+1. Self-convergence: `rubdyn run cases/two-plane.toml --solver event` for rtol = 1e-6 ... 1e-12
+   (atol = 1e-3 rtol) against rtol 1e-13: per-plane impact and lift-off counts, whether the event
+   sequence is the reference's, the largest event shift, the largest difference of the rotor's
+   point R (x_r, y_r) and of the second plane's ring (x_s_2, y_s_2) on the output grid, the energy
+   residual, steps and wall time.
+2. Work-precision: the same error for Moreau-Jean (mj, mj-proj) at h = 1e-5 ... 1e-7 s, with the
+   wall time of each run (one run each, on a shared machine: ratios, not absolute times).
+3. Stress scenes (event solver, rtol 1e-10), each against mj-proj at h = 1e-7 s as a cross-check:
+   - two rings at one plane (different rings, the same gap): the first impact hits both at once;
+   - one plane in permanent contact while the other bounces (e_n = 0.5: impact sequences
+     truncated as Zeno, per contact);
+   - the reference ring split into two identical halves (redundant contacts: every event at both
+     at once, the force shared by the minimum-norm rule) against the one-ring run;
+   - four planes (K = 4, radius / gap equal at every plane).
+Usage: validation/planes/run.py [path/to/rubdyn] [--quick]   (about 1 min on 2 cores)
+"""
+import math
+import os
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.dirname(HERE))
+from common import ROOT, machine, read_output, script_args, write_csv  # noqa: E402
+
+RUBDYN, QUICK, OUT = script_args("planes")
+CASE = os.path.join(ROOT, "cases", "two-plane.toml")
+T_END = "0.02" if QUICK else "0.05"
+DT = 1e-4
+
+
+def run(name, args, case=CASE):
+    """Runs rubdyn into OUT/name; returns (summary, grid, events, wall) (events: (t, kind,
+    contact) read from events.csv)."""
+    folder = os.path.join(OUT, name)
+    t0 = time.perf_counter()
+    subprocess.run([RUBDYN, "run", case, "--out", folder, "--quiet", "--t-end", T_END] + args,
+                   check=True, stdout=subprocess.DEVNULL)
+    wall = time.perf_counter() - t0
+    summary, grid, _ = read_output(folder, DT)
+    import csv
+    with open(os.path.join(folder, "events.csv"), newline="") as f:
+        events = [(float(r["t"]), r["kind"], int(r.get("contact", "1") or 1))
+                  for r in csv.DictReader(f)]
+    return summary, grid, events, wall
+
+
+def grid_diff(g, ref, cols):
+    common = sorted(set(g) & set(ref))
+    return max(math.hypot(g[k][cols[0]] - ref[k][cols[0]], g[k][cols[1]] - ref[k][cols[1]])
+               for k in common)
+
+
+def counts(events, planes):
+    out = []
+    for p in planes:
+        imp = sum(1 for _, k, c in events if c == p and k == "impact")
+        lift = sum(1 for _, k, c in events if c == p and k == "liftoff")
+        zeno = sum(1 for _, k, c in events if c == p and k == "zeno")
+        out.append("%d/%d/%d" % (imp, lift, zeno))
+    return " ".join(out)
+
+
+def event_shift(e, ref):
+    kinds = ("impact", "liftoff", "zeno")
+    a = [(t, k, c) for t, k, c in e if k in kinds]
+    b = [(t, k, c) for t, k, c in ref if k in kinds]
+    if [x[1:] for x in a] != [x[1:] for x in b]:
+        return False, float("nan")
+    return True, max((abs(x[0] - y[0]) for x, y in zip(a, b)), default=0.0)
+
+
+def fmt(x, f="%.2e"):
+    return "nan" if x is None or (isinstance(x, float) and math.isnan(x)) else f % x
+
+
+def four_plane_case():
+    """cases/two-plane.toml's rotor with four planes, radius / gap = 250 at each."""
+    with open(CASE) as f:
+        text = f.read()
+    head = text[:text.index("\n[[plane]]") + 1]
+    tail = text[text.index("\n[loads]") + 1:]
+    planes = ""
+    for pos, ms, ks in ((0.1, 0.5, 8e6), (0.2, 1.0, 4e6), (0.3, 1.5, 3e6), (0.4, 2.0, 2e6)):
+        planes += ("[[plane]]\nposition = %r\nradius = %r\ngap = %r\nmu = 0.1\nstator_mass = %r\n"
+                   "stator_k = %r\nstator_c = 50.0\n\n" % (pos, 0.125 * pos, 5e-4 * pos, ms, ks))
+    path = os.path.join(OUT, "four-plane.toml")
+    os.makedirs(OUT, exist_ok=True)
+    with open(path, "w") as f:
+        f.write(head.replace('name = "two-plane"', 'name = "four-plane"') + planes + tail)
+    return path
+
+
+def split_ring_case():
+    """cases/reference.toml with its ring split into two identical halves at the one plane."""
+    with open(os.path.join(ROOT, "cases", "reference.toml")) as f:
+        s = f.read()
+    i = s.index("radius = 0.05")
+    s = s[:i] + s[s.index("\n", i) + 1:]
+    half = ("[[plane]]\nposition = 0.4\nradius = 0.05\ngap = 2.0e-4\nmu = 0.1\n"
+            "stator_mass = 1.0\nstator_k = 1.0e6\nstator_c = 50.0\n\n")
+    s = s[:s.index("[stator]")] + half + half + s[s.index("[loads]"):]
+    path = os.path.join(OUT, "split-ring.toml")
+    os.makedirs(OUT, exist_ok=True)
+    with open(path, "w") as f:
+        f.write(s)
+    return path
+
+
+def main():
+    lines = ["# Several rub planes: the event-driven integrator with K contacts", "",
+             "Generated by `validation/planes/run.py%s` (do not edit by hand). Machine: %s. "
+             "Simulated time %s s; errors on the output grid (dt = 1e-4 s)." % (
+                 " --quick" if QUICK else "", machine(), T_END), ""]
+    rows = []
+    # 1. self-convergence
+    rtols = ["1e-6", "1e-7", "1e-8", "1e-9", "1e-10", "1e-11", "1e-12"]
+    ref = run("event-1e-13", ["--solver", "event", "--rtol", "1e-13", "--atol", "1e-16"])
+    lines += ["## 1. Self-convergence on cases/two-plane.toml (reference: rtol 1e-13)", "",
+              "Events per plane as impacts/lift-offs/Zeno, plane 1 then plane 2.", "",
+              "| rtol | events | same sequence | max event shift [s] | max diff R [m] | "
+              "max diff ring 2 [m] | energy residual [J] | steps | wall [s] |",
+              "|---|---|---|---|---|---|---|---|---|"]
+    for r in rtols:
+        s, g, e, w = run("event-" + r, ["--solver", "event", "--rtol", r,
+                                        "--atol", "%.0e" % (float(r) * 1e-3)])
+        same, shift = event_shift(e, ref[2])
+        dr = grid_diff(g, ref[1], ("x_r", "y_r"))
+        ds = grid_diff(g, ref[1], ("x_s_2", "y_s_2"))
+        lines.append("| %s | %s | %s | %s | %s | %s | %s | %d | %.3f |" % (
+            r, counts(e, (1, 2)), "yes" if same else "no", fmt(shift), fmt(dr), fmt(ds),
+            fmt(s["energy_residual"]), s["steps"], s["wall_seconds"]))
+        rows.append({"study": "self-convergence", "run": "event rtol " + r, "error_R": dr,
+                     "error_ring2": ds, "energy_residual": s["energy_residual"],
+                     "steps": s["steps"], "wall_seconds": s["wall_seconds"],
+                     "termination": s["termination"]})
+    # 2. work-precision against the same reference
+    lines += ["", "## 2. Work-precision (error of R against the event reference)", "",
+              "| solver | setting | max diff R [m] | max diff ring 2 [m] | steps | wall [s] |",
+              "|---|---|---|---|---|---|"]
+    hs = ["1e-5", "1e-6"] if QUICK else ["1e-5", "1e-6", "1e-7"]
+    for solver in ("mj", "mj-proj"):
+        for h in hs:
+            s, g, e, w = run("%s-%s" % (solver, h), ["--solver", solver, "--h", h])
+            dr = grid_diff(g, ref[1], ("x_r", "y_r"))
+            ds = grid_diff(g, ref[1], ("x_s_2", "y_s_2"))
+            lines.append("| %s | h = %s s | %s | %s | %d | %.3f |" % (
+                solver, h, fmt(dr), fmt(ds), s["steps"], s["wall_seconds"]))
+            rows.append({"study": "work-precision", "run": "%s h %s" % (solver, h),
+                         "error_R": dr, "error_ring2": ds,
+                         "energy_residual": s["energy_residual"], "steps": s["steps"],
+                         "wall_seconds": s["wall_seconds"], "termination": s["termination"]})
+    for r in ("1e-8", "1e-10", "1e-12"):
+        s, g, e, w = run("event-" + r, ["--solver", "event", "--rtol", r,
+                                        "--atol", "%.0e" % (float(r) * 1e-3)])
+        lines.append("| event | rtol = %s | %s | %s | %d | %.3f |" % (
+            r, fmt(grid_diff(g, ref[1], ("x_r", "y_r"))),
+            fmt(grid_diff(g, ref[1], ("x_s_2", "y_s_2"))), s["steps"], s["wall_seconds"]))
+    # 3. stress scenes
+    lines += ["", "## 3. Stress scenes (event solver at rtol 1e-10; cross-check: mj-proj, "
+              "h = 1e-7 s)", "",
+              "| scene | termination | events per plane (impacts/lift-offs/Zeno) | "
+              "simultaneous impacts | energy residual [J] | largest flow [J] | penetration [m] | "
+              "diff R vs cross-check [m] | wall [s] |",
+              "|---|---|---|---|---|---|---|---|---|"]
+    four = four_plane_case()
+    split = split_ring_case()
+    scenes = [
+        ("two rings at one plane", CASE, ["--set", "plane.2.position=0.4", "--set",
+                                          "plane.2.radius=0.05", "--set", "plane.2.gap=2e-4",
+                                          "--set", "plane.2.mu=0.2"], (1, 2), None),
+        ("plane 1 in contact, plane 2 bouncing (e_n = 0.5)", CASE,
+         ["--set", "plane.1.mu=0.3", "--set", "plane.2.gap=1.02e-4", "--set", "plane.2.e_n=0.5"],
+         (1, 2), None),
+        ("reference ring split in two halves (redundant)", split, [], (1, 2),
+         os.path.join(ROOT, "cases", "reference.toml")),
+        ("four planes (K = 4)", four, [], (1, 2, 3, 4), None),
+    ]
+    for i, (name, case, extra, planes, other) in enumerate(scenes):
+        s, g, e, w = run("scene%d-event" % i, ["--solver", "event", "--rtol", "1e-10",
+                                                "--atol", "1e-13"] + extra, case)
+        if other is None:
+            _, gc, _, _ = run("scene%d-mjproj" % i, ["--solver", "mj-proj", "--h", "1e-7"] + extra,
+                              case)
+            check = "mj-proj"
+        else:
+            _, gc, _, _ = run("scene%d-one-ring" % i, ["--solver", "event", "--rtol", "1e-10",
+                                                       "--atol", "1e-13"], other)
+            check = "one-ring event run"
+        imp_t = {}
+        for t, k, c in e:
+            if k in ("impact", "zeno"):
+                imp_t.setdefault(t, set()).add(c)
+        simult = sum(1 for v in imp_t.values() if len(v) > 1)
+        flow = max(abs(s["energy_initial"]), abs(s["energy_final"]), abs(s["work_torque"]),
+                   abs(s["work_friction"]), abs(s["work_impacts"]))
+        d = grid_diff(g, gc, ("x_r", "y_r"))
+        lines.append("| %s | %s | %s | %d | %s | %.4g | %s | %s (%s) | %.3f |" % (
+            name, s["termination"], counts(e, planes), simult, fmt(s["energy_residual"]), flow,
+            fmt(s["max_penetration"]), fmt(d), check, s["wall_seconds"]))
+        rows.append({"study": "stress", "run": name, "error_R": d, "error_ring2": float("nan"),
+                     "energy_residual": s["energy_residual"], "steps": s["steps"],
+                     "wall_seconds": s["wall_seconds"], "termination": s["termination"]})
+    lines += ["", "Reading: section 1 says how far the event solver's answer moves with its "
+              "tolerance (the reference's own error is below the tightest row); section 2 puts "
+              "Moreau-Jean's first-order error beside it; section 3 says every scene ends "
+              "complete, with its balance closed and no penetration beyond round-off, and how "
+              "far an independent scheme (or, for the split ring, the one-ring model) is.", ""]
+    with open(os.path.join(HERE, "table.md"), "w") as f:
+        f.write("\n".join(lines))
+    write_csv(os.path.join(HERE, "results.csv"), rows)
+    print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()
