@@ -39,7 +39,7 @@ std::string planes_text(const std::string& planes = "") {
                              "stator_mass = 2.0\nstator_k = 2e6\nstator_c = 100.0\n\n"
                            : planes);
   if (!planes.empty()) {
-    // several planes run with Moreau-Jean (the event-driven solver takes one plane today)
+    // several planes run with Moreau-Jean here (a fixed-step case)
     erase_line("rtol = ");
     erase_line("atol = ");
     const auto k = s.find("kind = \"event\"");

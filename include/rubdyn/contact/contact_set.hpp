@@ -2,8 +2,9 @@
 // K frictional contacts solved together: the Coulomb-Signorini problem of a set of contacts in
 // the plane, as coulomb_signorini.hpp is for one. Exact enumeration of the contact modes for
 // K <= kMaxEnumContacts, a projected (non-smooth) Gauss-Seidel iteration beyond. Called by
-// Moreau-Jean with several contacts (the impulses of the active ones, docs/time-steppers.md 3.1);
-// the event-driven integrator still takes one contact. Derivation, tie rule and tolerances:
+// Moreau-Jean with several contacts (the impulses of the active ones, docs/time-steppers.md 3.1)
+// and by the event-driven integrator with several (its joint impacts and mode decisions,
+// src/hybrid/event_multi.cpp). Derivation, tie rule and tolerances:
 // docs/contact-set.md.
 //
 // Contact i has rows 2i (normal) and 2i+1 (tangential) of the 2K x 2K Delassus operator

@@ -114,8 +114,8 @@ class LagrangianModel {
   virtual void smooth_force_jacobians(double t, VecIn q, VecIn v, MatOut dfdq,
                                       MatOut dfdv) const = 0;
 
-  /// Number of unilateral contacts K. The solvers handle one (the circular clearance); a model
-  /// with more is rejected by them, not silently reduced.
+  /// Number of unilateral contacts K >= 1. Every solver takes several (the event-driven
+  /// integrator up to 8); none silently reduces them.
   virtual int contact_count() const { return 1; }
   /// Kinematics of contact k at (t, q, v) into `c` (W_N and W_T of size n, every field set).
   virtual void compute_contact(int k, double t, VecIn q, VecIn v, ContactKinematics& c) const = 0;
