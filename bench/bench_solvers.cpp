@@ -177,5 +177,11 @@ BENCHMARK_CAPTURE(from_case, two_plane_mj_30ms_h1e6, "two-plane.toml", {"run.t_e
 BENCHMARK_CAPTURE(from_case, two_plane_mj_proj_30ms_h1e6, "two-plane.toml",
                   {"run.t_end=0.03", "solver.kind=\"mj-proj\""})
     ->Unit(benchmark::kMillisecond);
+// the event-driven solver on the same case (its contact phases as the DAE with projection, the
+// only formulation with several contacts): per-step costs against the one-plane
+// event_500ms_rtol1e10_projection above, phase by phase
+BENCHMARK_CAPTURE(from_case, two_plane_event_50ms_rtol1e10, "two-plane.toml",
+                  {"run.t_end=0.05", "solver.kind=\"event\""})
+    ->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();
