@@ -31,7 +31,7 @@ std::unique_ptr<LagrangianModel> build_jeffcott(const CaseSpec& spec) {
 
 std::vector<Coordinate> matrices_coordinates(const CaseSpec& spec) {
   const MatrixParams& p = spec.matrices;
-  return matrix_model_coordinates(p.rotor.size(), p.rotor.names, p.node, p.stator.rigid);
+  return matrix_model_coordinates(p.rotor.size(), p.rotor.names, p.node_list());
 }
 std::unique_ptr<LagrangianModel> build_matrices(const CaseSpec& spec) {
   return std::make_unique<MatrixModel>(spec.matrices);

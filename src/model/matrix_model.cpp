@@ -9,8 +9,9 @@
 namespace rubdyn {
 
 std::vector<Coordinate> matrix_model_coordinates(int n, const std::vector<std::string>& names,
-                                                 const MatrixContactNode& node, bool rigid) {
+                                                 const std::vector<MatrixNode>& nodes) {
   using R = CoordinateRole;
+  const bool several = nodes.size() > 1;
   std::vector<Coordinate> c;
   for (int i = 0; i < n; ++i) {
     std::string nm = "q";
@@ -19,48 +20,90 @@ std::vector<Coordinate> matrix_model_coordinates(int n, const std::vector<std::s
     } else {
       nm.append(std::to_string(i));
     }
-    const bool x = i == node.x, y = i == node.y;
+    int node = -1;
+    bool x = false;
+    for (std::size_t k = 0; k < nodes.size() && node < 0; ++k) {
+      if (nodes[k].at.x == i) node = static_cast<int>(k), x = true;
+      if (nodes[k].at.y == i) node = static_cast<int>(k);
+    }
     std::string rate = "v";  // (appended, not "v" + nm: g++ 12 warns falsely, -Wrestrict)
     rate.append(nm);
-    c.push_back({nm, rate, rate, "m",
-                 x   ? "the contact node's centre (seal circle), horizontal"
-                 : y ? "the contact node's centre (seal circle), vertical"
-                     : "a coordinate of the user's rotor",
-                 x   ? R::RotorX
-                 : y ? R::RotorY
-                     : R::Other,
-                 0});
+    std::string meaning = "a coordinate of the user's rotor";
+    if (node >= 0) {
+      // (appended: g++ 12 warns falsely on operator+ chains, -Wrestrict)
+      meaning = several ? "contact node " : "the contact node's centre";
+      if (several) meaning.append(std::to_string(node + 1)).append("'s centre");
+      meaning.append(x ? " (seal circle), horizontal" : " (seal circle), vertical");
+    }
+    c.push_back({nm, rate, rate, "m", meaning,
+                 node < 0 ? R::Other
+                 : x      ? R::RotorX
+                          : R::RotorY,
+                 node < 0 ? 0 : node});
   }
   c.push_back(
       {"theta", "omega", "omega0", "rad", "spin angle (its rate: the spin speed)", R::Spin, 0});
-  if (!rigid) {
-    c.push_back({"x_s", "vx_s", "vx_s", "m", "stator centre, horizontal", R::StatorX, 0});
-    c.push_back({"y_s", "vy_s", "vy_s", "m", "stator centre, vertical", R::StatorY, 0});
+  for (std::size_t k = 0; k < nodes.size(); ++k) {
+    if (nodes[k].stator.rigid) continue;
+    std::string sfx, of;
+    if (several) {
+      sfx.append("_").append(std::to_string(k + 1));
+      of.append(" of node ").append(std::to_string(k + 1));
+    }
+    const int plane = static_cast<int>(k);
+    std::string xs = "x_s", ys = "y_s", vxs = "vx_s", vys = "vy_s";
+    xs.append(sfx);
+    ys.append(sfx);
+    vxs.append(sfx);
+    vys.append(sfx);
+    std::string mx = "stator centre", my = "stator centre";
+    mx.append(of).append(", horizontal");
+    my.append(of).append(", vertical");
+    c.push_back({xs, vxs, vxs, "m", mx, R::StatorX, plane});
+    c.push_back({ys, vys, vys, "m", my, R::StatorY, plane});
   }
   return c;
 }
 
 MatrixModel::MatrixModel(const MatrixParams& p)
     : p_(p),
+      K_(static_cast<int>(p.node_list().size())),
       n_(p.rotor.size()),
-      N_(p.rotor.size() + (p.stator.rigid ? 1 : 3)),
+      N_(p.rotor.size() + 1),
       th_(p.rotor.size()),
-      ix_(p.node.x),
-      iy_(p.node.y),
-      sprung_(!p.stator.rigid),
       chart_(*this) {
   const auto& r = p.rotor;
+  const std::vector<MatrixNode> list = p.node_list();
+  RUBDYN_DEMAND(K_ >= 1 && K_ <= kMaxContactNodes);
+  for (const MatrixNode& mn : list) {
+    Node nd;
+    nd.ix = mn.at.x;
+    nd.iy = mn.at.y;
+    nd.radius = mn.at.radius;
+    nd.gap = mn.at.gap;
+    nd.law = mn.law;
+    nd.stator = mn.stator;
+    RUBDYN_DEMAND(nd.ix >= 0 && nd.ix < n_ && nd.iy >= 0 && nd.iy < n_ && nd.ix != nd.iy);
+    for (const Node& o : nodes_)  // a coordinate belongs to one node
+      RUBDYN_DEMAND(o.ix != nd.ix && o.ix != nd.iy && o.iy != nd.ix && o.iy != nd.iy);
+    if (!mn.stator.rigid) {
+      nd.xs = N_;
+      nd.ys = N_ + 1;
+      N_ += 2;
+    }
+    nodes_.push_back(nd);
+  }
+  ix_ = nodes_[0].ix;
+  iy_ = nodes_[0].iy;
+  xs_ = nodes_[0].xs;
+  ys_ = nodes_[0].ys;
+  sprung_ = nodes_[0].sprung();
   RUBDYN_DEMAND(n_ >= 2 && r.M.cols() == n_ && r.C.rows() == n_ && r.C.cols() == n_ &&
                 r.K.rows() == n_ && r.K.cols() == n_ && r.G.rows() == n_ && r.G.cols() == n_ &&
                 r.f0.size() == n_);
-  RUBDYN_DEMAND(ix_ >= 0 && ix_ < n_ && iy_ >= 0 && iy_ < n_ && ix_ != iy_);
   // the energy V = 1/2 q^T K q and the Lagrangian's G need these exactly (io symmetrises)
   RUBDYN_DEMAND(r.K == r.K.transpose() && r.G == -r.G.transpose());
-  if (sprung_) {
-    xs_ = n_ + 1;
-    ys_ = n_ + 2;
-  }
-  coords_ = matrix_model_coordinates(n_, r.names, p.node, p.stator.rigid);
+  coords_ = matrix_model_coordinates(n_, r.names, list);
   Eigen::LLT<Mat> llt(r.M);
   RUBDYN_DEMAND(llt.info() == Eigen::Success);
   L_ = llt.matrixL();
@@ -115,7 +158,8 @@ void MatrixModel::mass_matrix(VecIn q, MatOut M) const {
   M.topLeftCorner(n_, n_) = p_.rotor.M;
   for (int i = 0; i < n_; ++i) M(i, th_) = M(th_, i) = b(i, q, ubs, ubc);
   M(th_, th_) = p_.rotor.Jp;
-  if (sprung_) M(xs_, xs_) = M(ys_, ys_) = p_.stator.mass;
+  for (const Node& nd : nodes_)
+    if (nd.sprung()) M(nd.xs, nd.xs) = M(nd.ys, nd.ys) = nd.stator.mass;
 }
 
 void MatrixModel::mass_product(VecIn q, VecIn x, VecOut y) const {
@@ -128,9 +172,10 @@ void MatrixModel::mass_product(VecIn q, VecIn x, VecOut y) const {
     yth += bi * x[i];
   }
   y[th_] = yth;
-  if (sprung_) {
-    y[xs_] = p_.stator.mass * x[xs_];
-    y[ys_] = p_.stator.mass * x[ys_];
+  for (const Node& nd : nodes_) {
+    if (!nd.sprung()) continue;
+    y[nd.xs] = nd.stator.mass * x[nd.xs];
+    y[nd.ys] = nd.stator.mass * x[nd.ys];
   }
 }
 
@@ -156,9 +201,10 @@ void MatrixModel::solve_mass(VecIn q, MatOut B) const {
     const double th = (r[th_] - bz) / s;
     for (int i = 0; i < n_; ++i) z[i] -= u(i, q, ubs, ubc) * th;
     r[th_] = th;
-    if (sprung_) {
-      r[xs_] /= p_.stator.mass;
-      r[ys_] /= p_.stator.mass;
+    for (const Node& nd : nodes_) {
+      if (!nd.sprung()) continue;
+      r[nd.xs] /= nd.stator.mass;
+      r[nd.ys] /= nd.stator.mass;
     }
   }
 }
@@ -193,9 +239,11 @@ void MatrixModel::smooth_forces(double /*t*/, VecIn q, VecIn v, VecOut f) const 
     f[iy_] += om * om * ubs;
     f[th_] -= L.gravity * ubc;  // gravity's torque on the unbalance
   }
-  if (sprung_) {
-    f[xs_] = -p_.stator.c * v[xs_] - p_.stator.k * q[xs_];
-    f[ys_] = -p_.stator.c * v[ys_] - p_.stator.k * q[ys_] - p_.stator.mass * L.gravity;
+  for (const Node& nd : nodes_) {
+    if (!nd.sprung()) continue;
+    const MatrixStatorParams& st = nd.stator;
+    f[nd.xs] = -st.c * v[nd.xs] - st.k * q[nd.xs];
+    f[nd.ys] = -st.c * v[nd.ys] - st.k * q[nd.ys] - st.mass * L.gravity;
   }
 }
 
@@ -218,44 +266,48 @@ void MatrixModel::smooth_force_jacobians(double /*t*/, VecIn q, VecIn v, MatOut 
     dfdv(ix_, th_) += 2.0 * om * ubc;
     dfdv(iy_, th_) += 2.0 * om * ubs;
   }
-  if (sprung_) {
-    dfdq(xs_, xs_) = dfdq(ys_, ys_) = -p_.stator.k;
-    dfdv(xs_, xs_) = dfdv(ys_, ys_) = -p_.stator.c;
+  for (const Node& nd : nodes_) {
+    if (!nd.sprung()) continue;
+    dfdq(nd.xs, nd.xs) = dfdq(nd.ys, nd.ys) = -nd.stator.k;
+    dfdv(nd.xs, nd.xs) = dfdv(nd.ys, nd.ys) = -nd.stator.c;
   }
 }
 
-void MatrixModel::compute_contact(int /*k*/, double /*t*/, VecIn q, VecIn v,
+void MatrixModel::compute_contact(int k, double /*t*/, VecIn q, VecIn v,
                                   ContactKinematics& c) const {
-  // the Jeffcott rotor's kinematics with the disc centre at the node's (x, y)
+  // the Jeffcott rotor's kinematics with the disc centre at node k's (x, y)
+  const Node& nd = this->nd(k);
+  const int ix = nd.ix, iy = nd.iy, xs_i = nd.xs, ys_i = nd.ys;
+  const bool sprung = nd.sprung();
   double* wn = c.W_N.data();
   double* wt = c.W_T.data();
   for (int i = 0; i < N_; ++i) wn[i] = wt[i] = 0.0;
   c.b_N = c.b_T = 0.0;
-  const double xs = sprung_ ? q[xs_] : 0.0, ys = sprung_ ? q[ys_] : 0.0;
-  const double vxs = sprung_ ? v[xs_] : 0.0, vys = sprung_ ? v[ys_] : 0.0;
-  const double sx = q[ix_] - xs, sy = q[iy_] - ys;
+  const double xs = sprung ? q[xs_i] : 0.0, ys = sprung ? q[ys_i] : 0.0;
+  const double vxs = sprung ? v[xs_i] : 0.0, vys = sprung ? v[ys_i] : 0.0;
+  const double sx = q[ix] - xs, sy = q[iy] - ys;
   const double rho = std::sqrt(sx * sx + sy * sy);
-  c.d_N = p_.node.gap - rho;
+  c.d_N = nd.gap - rho;
   if (rho == 0.0) {  // centred: no normal, and no contact possible (d_N = g0 > 0)
     c.normal_defined = false;
     c.v_N = c.v_t = c.wdot_N = c.wdot_T = 0.0;
     return;
   }
   c.normal_defined = true;
-  const double R = p_.node.radius;
+  const double R = nd.radius;
   const double nx = sx / rho, ny = sy / rho, tx = ny, ty = -nx;
-  wn[ix_] = -nx;
-  wn[iy_] = -ny;
-  wt[ix_] = tx;
-  wt[iy_] = ty;
+  wn[ix] = -nx;
+  wn[iy] = -ny;
+  wt[ix] = tx;
+  wt[iy] = ty;
   wt[th_] = -R;
-  if (sprung_) {
-    wn[xs_] = nx;
-    wn[ys_] = ny;
-    wt[xs_] = -tx;
-    wt[ys_] = -ty;
+  if (sprung) {
+    wn[xs_i] = nx;
+    wn[ys_i] = ny;
+    wt[xs_i] = -tx;
+    wt[ys_i] = -ty;
   }
-  const double dvx = v[ix_] - vxs, dvy = v[iy_] - vys;
+  const double dvx = v[ix] - vxs, dvy = v[iy] - vys;
   const double vn = nx * dvx + ny * dvy;
   const double vt = tx * dvx + ty * dvy;
   c.v_N = -vn;
@@ -271,7 +323,8 @@ double MatrixModel::kinetic_energy(double /*t*/, VecIn q, VecIn v) const {
   double T = p_.rotor.Jp * om * om;
   for (int i = 0; i < n_; ++i)
     T += v[i] * (p_.rotor.M.col(i).dot(v.head(n_)) + 2.0 * om * b(i, q, ubs, ubc));
-  if (sprung_) T += p_.stator.mass * (v[xs_] * v[xs_] + v[ys_] * v[ys_]);
+  for (const Node& nd : nodes_)
+    if (nd.sprung()) T += nd.stator.mass * (v[nd.xs] * v[nd.xs] + v[nd.ys] * v[nd.ys]);
   return 0.5 * T;
 }
 
@@ -280,9 +333,10 @@ double MatrixModel::potential_energy(double /*t*/, VecIn q) const {
   double V = 0.0;
   for (int i = 0; i < n_; ++i) V += q[i] * (0.5 * Kt_.col(i).dot(q.head(n_)) - p_.rotor.f0[i]);
   if (L.unbalance != 0.0) V += L.gravity * L.unbalance * std::sin(q[th_] + L.unbalance_phase);
-  if (sprung_)
-    V += 0.5 * p_.stator.k * (q[xs_] * q[xs_] + q[ys_] * q[ys_]) +
-         L.gravity * p_.stator.mass * q[ys_];
+  for (const Node& nd : nodes_)
+    if (nd.sprung())
+      V += 0.5 * nd.stator.k * (q[nd.xs] * q[nd.xs] + q[nd.ys] * q[nd.ys]) +
+           L.gravity * nd.stator.mass * q[nd.ys];
   return V;
 }
 
@@ -291,7 +345,8 @@ SmoothPower MatrixModel::smooth_power(double /*t*/, VecIn /*q*/, VecIn v) const 
   p.external = p_.loads.drive_torque(v[th_]) * v[th_];
   double d = 0.0;
   for (int i = 0; i < n_; ++i) d -= v[i] * Ct_.col(i).dot(v.head(n_));
-  if (sprung_) d -= p_.stator.c * (v[xs_] * v[xs_] + v[ys_] * v[ys_]);
+  for (const Node& nd : nodes_)
+    if (nd.sprung()) d -= nd.stator.c * (v[nd.xs] * v[nd.xs] + v[nd.ys] * v[nd.ys]);
   p.damping = d;
   return p;
 }
@@ -301,9 +356,14 @@ std::optional<LinearModel> MatrixModel::linearize(Linearization mode) const {
   // of an isotropic rotor: only an even n has them
   if (n_ % 2 != 0) return std::nullopt;
   const bool tied = mode == Linearization::Tied;
-  if (tied && !sprung_) return std::nullopt;  // (the rigid ring pins the node)
-  const int m = n_ + (tied || !sprung_ ? 0 : 2);
+  int rings = 0;
+  for (const Node& nd : nodes_) {
+    if (tied && !nd.sprung()) return std::nullopt;  // (a rigid ring pins its node)
+    rings += nd.sprung() ? 1 : 0;
+  }
+  const int m = n_ + (tied ? 0 : 2 * rings);
   LinearModel lm;
+  // the rings' coordinates follow theta in coords_ (skipped)
   for (int i = 0; i < m; ++i)
     lm.names.push_back(coords_[static_cast<std::size_t>(i < n_ ? i : i + 1)].name);
   lm.M.setZero(m, m);
@@ -316,15 +376,18 @@ std::optional<LinearModel> MatrixModel::linearize(Linearization mode) const {
   lm.D.topLeftCorner(n_, n_) = r.C;
   lm.K.topLeftCorner(n_, n_) = r.K;
   for (int k = 0; k < n_; k += 2) lm.nodes.push_back({k, k + 1});
-  const auto& s = p_.stator;
-  if (sprung_) {
-    const int a = tied ? ix_ : n_, b = tied ? iy_ : n_ + 1;
+  int next = n_;
+  for (const Node& nd : nodes_) {
+    if (!nd.sprung()) continue;
+    const auto& s = nd.stator;
+    const int a = tied ? nd.ix : next, b = tied ? nd.iy : next + 1;
     for (int i : {a, b}) {
       lm.M(i, i) += s.mass;
       lm.D(i, i) += s.c;
       lm.K(i, i) += s.k;
     }
-    if (!tied) lm.nodes.push_back({n_, n_ + 1});
+    if (!tied) lm.nodes.push_back({next, next + 1});
+    next += 2;
   }
   return lm;
 }
@@ -351,7 +414,7 @@ void MatrixModel::Chart::chart(ChartMode mode, VecIn q, VecIn v, ChartAnchor& an
   }
   int k = nr;
   if (mode == ChartMode::Slip) {
-    const double g0 = m.p_.node.gap;
+    const double g0 = m.nd(0).gap;
     p[m.slot_] = phi;
     pd[m.slot_] = (-std::sin(phi) * (v[m.ix_] - vxs) + std::cos(phi) * (v[m.iy_] - vys)) / g0;
     p[k] = q[m.th_];
@@ -373,7 +436,7 @@ void MatrixModel::Chart::chart(ChartMode mode, VecIn q, VecIn v, ChartAnchor& an
 void MatrixModel::Chart::embed(ChartMode mode, const ChartAnchor& anchor, VecIn p, VecIn pd,
                                VecOut q, VecOut v) const {
   const MatrixModel& m = m_;
-  const double g0 = m.p_.node.gap;
+  const double g0 = m.nd(0).gap;
   const int nr = m.n_ - 1;
   for (int k = 0; k < nr; ++k) {
     if (k == m.slot_) continue;
@@ -389,7 +452,7 @@ void MatrixModel::Chart::embed(ChartMode mode, const ChartAnchor& anchor, VecIn 
     q[m.th_] = p[k];
     v[m.th_] = pd[k++];
   } else {
-    const double ratio = m.p_.node.radius / g0;
+    const double ratio = m.nd(0).radius / g0;
     phi = anchor[0] - ratio * p[m.slot_];
     phid = -ratio * pd[m.slot_];
     q[m.th_] = anchor[1] + p[m.slot_];
@@ -412,7 +475,7 @@ void MatrixModel::Chart::embed(ChartMode mode, const ChartAnchor& anchor, VecIn 
 void MatrixModel::Chart::reduce(ChartMode mode, const ChartAnchor& /*anchor*/, VecIn /*p*/,
                                 VecIn /*pd*/, VecIn q, VecIn a, VecOut pdd) const {
   const MatrixModel& m = m_;
-  const double g0 = m.p_.node.gap;
+  const double g0 = m.nd(0).gap;
   const double xs = m.sprung_ ? q[m.xs_] : 0.0, ys = m.sprung_ ? q[m.ys_] : 0.0;
   const double axs = m.sprung_ ? a[m.xs_] : 0.0, ays = m.sprung_ ? a[m.ys_] : 0.0;
   const int nr = m.n_ - 1;
@@ -440,7 +503,7 @@ ChartScales MatrixModel::Chart::scales(ChartMode mode) const {
   ChartScales sc;
   sc.length.assign(static_cast<std::size_t>(dim(mode)), 0.0);
   sc.length[static_cast<std::size_t>(m_.slot_)] =
-      mode == ChartMode::Slip ? m_.p_.node.gap : m_.p_.node.radius;
+      mode == ChartMode::Slip ? m_.nd(0).gap : m_.nd(0).radius;
   return sc;
 }
 

@@ -45,7 +45,7 @@ struct MatrixRotorParams {
   int size() const { return static_cast<int>(M.rows()); }
 };
 
-/// The contact node (one for now; a list of them comes with the K-contact solver).
+/// A contact node: where a seal circle sits among the coordinates, and its clearance.
 struct MatrixContactNode {
   int x = 0, y = 1;      ///< 0-based indices into q of the seal circle's centre
   double radius = 0.05;  ///< R [m]
@@ -57,17 +57,39 @@ struct MatrixStatorParams {
   double mass = 2.0, k = 2.0e6, c = 100.0;
 };
 
+/// One of several contact nodes: its seal circle, its contact law and its stator ring.
+struct MatrixNode {
+  MatrixContactNode at;
+  ContactLaw law{0.1, 0.0, 0.0};
+  MatrixStatorParams stator;
+};
+
+/// At most this many contact nodes (the event-driven integrator's K-contact limit).
+inline constexpr int kMaxContactNodes = 8;
+
 struct MatrixParams {
   MatrixRotorParams rotor;
+  /// The one contact node, its ring and law (used when `nodes` is empty: a case with one
+  /// [contact_node] section).
   MatrixContactNode node;
   MatrixStatorParams stator;
   ContactLaw contact{0.1, 0.0, 0.0};
+  /// Several contact nodes ([[contact_node]] tables), each with its ring and law; non-empty
+  /// replaces node, stator and contact. The unbalance sits at the first node.
+  std::vector<MatrixNode> nodes;
   LoadParams loads;
+  /// The nodes the model has: `nodes`, or the one of node, stator, contact.
+  std::vector<MatrixNode> node_list() const {
+    if (!nodes.empty()) return nodes;
+    return {MatrixNode{node, contact, stator}};
+  }
 };
 
-/// The coordinates of a matrices model of size n with these names (empty: q0..q{n-1}).
+/// The coordinates of a matrices model of size n with these names (empty: q0..q{n-1}) and
+/// these contact nodes: q, theta, then each sprung node's ring (x_s, y_s for one node; x_s_k,
+/// y_s_k, k = 1..K, for several).
 std::vector<Coordinate> matrix_model_coordinates(int n, const std::vector<std::string>& names,
-                                                 const MatrixContactNode& node, bool rigid);
+                                                 const std::vector<MatrixNode>& nodes);
 
 class MatrixModel final : public LagrangianModel {
  public:
@@ -83,17 +105,21 @@ class MatrixModel final : public LagrangianModel {
   void mass_matrix_product_jacobian(VecIn q, VecIn a, MatOut J) const override;
   void smooth_forces(double t, VecIn q, VecIn v, VecOut f) const override;
   void smooth_force_jacobians(double t, VecIn q, VecIn v, MatOut dfdq, MatOut dfdv) const override;
+  int contact_count() const override { return K_; }
   void compute_contact(int k, double t, VecIn q, VecIn v, ContactKinematics& c) const override;
   double kinetic_energy(double t, VecIn q, VecIn v) const override;
   double potential_energy(double t, VecIn q) const override;
   SmoothPower smooth_power(double t, VecIn q, VecIn v) const override;
-  double gap_scale(int /*k*/ = 0) const override { return p_.node.gap; }
-  const ContactLaw& contact_law(int /*k*/ = 0) const override { return p_.contact; }
-  double contact_radius(int /*k*/ = 0) const override { return p_.node.radius; }
-  const ContactChart* contact_chart() const override { return &chart_; }
+  double gap_scale(int k = 0) const override { return nd(k).gap; }
+  const ContactLaw& contact_law(int k = 0) const override { return nd(k).law; }
+  double contact_radius(int k = 0) const override { return nd(k).radius; }
+  /// Minimal coordinates for one node; none with several (the event-driven integrator then
+  /// integrates contact phases as the DAE with projection).
+  const ContactChart* contact_chart() const override { return K_ == 1 ? &chart_ : nullptr; }
   int spin_coordinate() const override { return th_; }
-  /// Free: (q, x_s, y_s) with M, G, C, K and the stator's; Tied: q with the stator's mass,
-  /// damper and spring added on the node's (x, y). `nodes`: the contact node (and the stator).
+  /// Free: (q, each ring's x_s, y_s) with M, G, C, K and the rings'; Tied: q with each ring's
+  /// mass, damper and spring added on its node's (x, y) (none when a ring is rigid: it pins
+  /// its node). `nodes`: the pairs (0, 1), (2, 3), ... of q, then the rings.
   std::optional<LinearModel> linearize(Linearization mode) const override;
 
   /// The Schur complement Jp - b^T M^-1 b of theta at q (> 0 where M_full is positive definite).
@@ -124,9 +150,21 @@ class MatrixModel final : public LagrangianModel {
   /// (u_b sin psi, u_b cos psi), zeros without an unbalance.
   void unbalance_terms(VecIn q, double& ubs, double& ubc) const;
 
+  /// A contact node as the model uses it: its coordinates, ring coordinates (-1: rigid), law.
+  struct Node {
+    int ix = 0, iy = 1, xs = -1, ys = -1;
+    double radius = 0.05, gap = 2e-4;
+    ContactLaw law;
+    MatrixStatorParams stator;
+    bool sprung() const { return xs >= 0; }
+  };
+  const Node& nd(int k) const { return nodes_[static_cast<std::size_t>(k)]; }
+
   MatrixParams p_;
-  int n_, N_, th_, xs_ = -1, ys_ = -1, ix_, iy_;
-  bool sprung_;
+  std::vector<Node> nodes_;
+  int K_;
+  int n_, N_, th_, xs_ = -1, ys_ = -1, ix_, iy_;  ///< (x_s, y_s, ix, iy: the first node's)
+  bool sprung_;  ///< the first node's ring is sprung
   std::vector<Coordinate> coords_;
   Mat L_;        ///< M = L L^T
   Mat MinvG_;    ///< M^-1 G
