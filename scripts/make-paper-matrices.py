@@ -15,6 +15,15 @@ M and G go to .npy files (M in C order, G in Fortran order), C, K and f0 to CSV,
 with 17 significant digits (round-trip exact).
 
     scripts/make-paper-matrices.py [--case cases/reference.toml] [--out cases/matrices-paper]
+
+With --point P the first two coordinates are not the bearing's but the rotor's point at axial
+distance P from B, z_P = (1 - s) z_b + s z_r with s = P / l (the paper's interpolation, eq. 9-10,
+the point a second rub plane sees): q' = (x_P, y_P, x_r, y_r), q = T q' and the matrices
+T^T M T, T^T C T, T^T K T, T^T G T, T^T f0, the same Lagrangian in other coordinates
+(cases/matrices-two-plane.toml: cases/two-plane.toml's rotor with a contact node at each plane).
+
+    scripts/make-paper-matrices.py --case cases/two-plane.toml --point 0.2 \
+        --out cases/matrices-two-plane
 """
 import argparse
 import pathlib
@@ -58,8 +67,23 @@ def main():
     root = pathlib.Path(__file__).resolve().parent.parent
     ap.add_argument("--case", default=root / "cases" / "reference.toml", type=pathlib.Path)
     ap.add_argument("--out", default=root / "cases" / "matrices-paper", type=pathlib.Path)
+    ap.add_argument("--point", type=float, default=None,
+                    help="axial position [m] of the point that replaces the bearing's coordinates")
     a = ap.parse_args()
-    M, C, K, G, f0 = matrices(tomllib.loads(a.case.read_text()))
+    case = tomllib.loads(a.case.read_text())
+    M, C, K, G, f0 = matrices(case)
+    if a.point is not None:
+        l = case["rotor"]["L"] - case["rotor"]["delta"]
+        s = a.point / l
+        T = np.zeros((4, 4))  # q = T q'
+        T[0, 0] = T[1, 1] = 1.0 / (1.0 - s)
+        T[0, 2] = T[1, 3] = -s / (1.0 - s)
+        T[2, 2] = T[3, 3] = 1.0
+        M, C, K, G = (T.T @ X @ T for X in (M, C, K, G))
+        f0 = T.T @ f0
+        # symmetric and skew to the bit (the reader symmetrises; so does the product's round-off)
+        M, C, K = (0.5 * (X + X.T) for X in (M, C, K))
+        G = 0.5 * (G - G.T)
     a.out.mkdir(parents=True, exist_ok=True)
     np.save(a.out / "M.npy", np.ascontiguousarray(M, dtype="<f8"))
     np.save(a.out / "G.npy", np.asfortranarray(G, dtype="<f8"))

@@ -99,8 +99,17 @@ int check_matrices(const CaseSpec& c) {
                         &c.matrix_files.f0})
     if (!f->empty()) fmt::print("  read {}\n", *f);
   const auto& cn = m.coordinates();
-  fmt::print("  contact node: ({}, {})\n", cn[static_cast<std::size_t>(p.node.x)].name,
-             cn[static_cast<std::size_t>(p.node.y)].name);
+  const std::vector<MatrixNode> nodes = p.node_list();
+  for (std::size_t k = 0; k < nodes.size(); ++k) {
+    const MatrixNode& nd = nodes[k];
+    fmt::print("  contact node{}: ({}, {}), radius {} m, gap {} m, mu {}, {}\n",
+               nodes.size() > 1 ? fmt::format(" {}", k + 1) : std::string(),
+               cn[static_cast<std::size_t>(nd.at.x)].name,
+               cn[static_cast<std::size_t>(nd.at.y)].name, nd.at.radius, nd.at.gap, nd.law.mu,
+               nd.stator.rigid ? std::string("rigid ring")
+                               : fmt::format("ring {} kg, {} N/m, {} N s/m", nd.stator.mass,
+                                             nd.stator.k, nd.stator.c));
+  }
   row("Schur complement of theta at q0", m.schur(c.initial.q0), "kg m^2 (> 0: M_full SPD)");
   row("omega0", c.initial.v0[p.rotor.size()], "rad/s");
   return 0;

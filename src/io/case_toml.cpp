@@ -109,6 +109,12 @@ std::string plane_section(std::size_t k) {
   return "plane." + std::to_string(k + 1);
 }
 
+/// The section of contact node k (0-based) of a matrices model's [[contact_node]] array:
+/// "contact_node.<k+1>" (written back as [[contact_node]]).
+std::string node_section(std::size_t k) {
+  return "contact_node." + std::to_string(k + 1);
+}
+
 void rigid_rotor_keys(SchemaBuilder& b, const CaseSpec& spec) {
   using S = const CaseSpec&;
   const auto single = [](S c) { return c.params.planes.empty(); };
@@ -200,7 +206,7 @@ void jeffcott_keys(SchemaBuilder& b) {
   b.num("stator", "gap", true, [](CaseSpec& c) { return &c.jeffcott.stator.gap; });
 }
 
-void matrices_keys(SchemaBuilder& b) {
+void matrices_keys(SchemaBuilder& b, const CaseSpec& spec) {
   // the matrices' files (read as the model is read: they decide the coordinates)
   const auto required = [](const CaseSpec&) { return true; };
   b.text("rotor", "M", [](CaseSpec& c) { return &c.matrix_files.M; });
@@ -214,16 +220,42 @@ void matrices_keys(SchemaBuilder& b) {
   b.text("rotor", "f0", [](CaseSpec& c) { return &c.matrix_files.f0; });
   b.num("rotor", "Jp", true, [](CaseSpec& c) { return &c.matrices.rotor.Jp; });
   b.text("rotor", "coordinates", [](CaseSpec& c) { return &c.matrix_files.coordinates; });
-  // one contact node for now (its keys become the entries of [[contact_node]] with several)
+  // one contact node as a section [contact_node] with [stator] and [contact], or several as
+  // [[contact_node]] tables, each with its own ring and law
+  using S = const CaseSpec&;
+  const auto single = [](S c) { return c.matrices.nodes.empty(); };
+  // (never met: a [contact_node] section and [[contact_node]] tables cannot share the name)
+  const auto node_moved = [](S c) {
+    return c.matrices.nodes.empty()
+               ? std::string()
+               : std::string("with [[contact_node]] tables each node has its keys in its table");
+  };
   b.integer("contact_node", "x", [](CaseSpec& c) { return &c.matrices.node.x; });
-  b.keys.back().required = required;
+  b.keys.back().required = single;
+  b.keys.back().refused = node_moved;
   b.integer("contact_node", "y", [](CaseSpec& c) { return &c.matrices.node.y; });
-  b.keys.back().required = required;
-  b.num("contact_node", "radius", true, [](CaseSpec& c) { return &c.matrices.node.radius; });
-  b.num("contact_node", "gap", true, [](CaseSpec& c) { return &c.matrices.node.gap; });
+  b.keys.back().required = single;
+  b.keys.back().refused = node_moved;
+  b.num(
+      "contact_node", "radius", false, [](CaseSpec& c) { return &c.matrices.node.radius; },
+      node_moved, single);
+  b.num(
+      "contact_node", "gap", false, [](CaseSpec& c) { return &c.matrices.node.gap; }, node_moved,
+      single);
+  const auto ring_moved = [](S c) {
+    return c.matrices.nodes.empty()
+               ? std::string()
+               : std::string(
+                     "with [[contact_node]] tables each node has its own ring: stator_mass, "
+                     "stator_k, stator_c (or stator_rigid = true) in each [[contact_node]]");
+  };
   b.flag("stator", "rigid", [](CaseSpec& c) { return &c.matrices.stator.rigid; });
-  const auto sprung = [](const CaseSpec& c) { return !c.matrices.stator.rigid; };
-  const auto rigid_refuses = [](const CaseSpec& c) {
+  b.keys.back().refused = ring_moved;
+  const auto sprung = [](const CaseSpec& c) {
+    return c.matrices.nodes.empty() && !c.matrices.stator.rigid;
+  };
+  const auto rigid_refuses = [ring_moved](const CaseSpec& c) {
+    if (!c.matrices.nodes.empty()) return ring_moved(c);
     return c.matrices.stator.rigid
                ? std::string(
                      "a rigid stator (stator.rigid = true) is a fixed ring without "
@@ -239,6 +271,38 @@ void matrices_keys(SchemaBuilder& b) {
   b.num(
       "stator", "c", false, [](CaseSpec& c) { return &c.matrices.stator.c; }, rigid_refuses,
       sprung);
+  for (std::size_t k = 0; k < spec.matrices.nodes.size(); ++k) {
+    const std::string sec = node_section(k);
+    auto at = [k](CaseSpec& c) -> MatrixNode& { return c.matrices.nodes[k]; };
+    const auto always = [](S) { return true; };
+    b.integer(sec, "x", [at](CaseSpec& c) { return &at(c).at.x; });
+    b.keys.back().required = always;
+    b.integer(sec, "y", [at](CaseSpec& c) { return &at(c).at.y; });
+    b.keys.back().required = always;
+    b.num(sec, "radius", true, [at](CaseSpec& c) { return &at(c).at.radius; });
+    b.num(sec, "gap", true, [at](CaseSpec& c) { return &at(c).at.gap; });
+    b.num(sec, "mu", true, [at](CaseSpec& c) { return &at(c).law.mu; });
+    b.num(sec, "e_n", false, [at](CaseSpec& c) { return &at(c).law.e_n; });
+    b.num(sec, "e_t", false, [at](CaseSpec& c) { return &at(c).law.e_t; });
+    b.flag(sec, "stator_rigid", [at](CaseSpec& c) { return &at(c).stator.rigid; });
+    const auto node_sprung = [k](S c) { return !c.matrices.nodes[k].stator.rigid; };
+    const auto node_rigid_refuses = [k](S c) {
+      return c.matrices.nodes[k].stator.rigid
+                 ? std::string(
+                       "a rigid ring (stator_rigid = true) is fixed, without mass, spring or "
+                       "damper: remove this key")
+                 : std::string();
+    };
+    b.num(
+        sec, "stator_mass", false, [at](CaseSpec& c) { return &at(c).stator.mass; },
+        node_rigid_refuses, node_sprung);
+    b.num(
+        sec, "stator_k", false, [at](CaseSpec& c) { return &at(c).stator.k; }, node_rigid_refuses,
+        node_sprung);
+    b.num(
+        sec, "stator_c", false, [at](CaseSpec& c) { return &at(c).stator.c; }, node_rigid_refuses,
+        node_sprung);
+  }
 }
 
 /// The largest size n of a matrices model (its hot paths cost n^2 per solve).
@@ -249,8 +313,15 @@ constexpr int kMaxMatrixSize = 1000;
 void contact_and_load_keys(SchemaBuilder& b) {
   using S = const CaseSpec&;
   // a rigid rotor with [[plane]] tables has a law per plane
-  const auto one_law = [](S c) { return c.model != "rigid-rotor" || c.params.planes.empty(); };
+  const auto one_law = [](S c) {
+    return (c.model != "rigid-rotor" || c.params.planes.empty()) &&
+           (c.model != "matrices" || c.matrices.nodes.empty());
+  };
   const auto law_moved = [](S c) {
+    if (c.model == "matrices" && !c.matrices.nodes.empty())
+      return std::string(
+          "with [[contact_node]] tables each node has its own law: mu, e_n, e_t in each "
+          "[[contact_node]]");
     return c.model == "rigid-rotor" && !c.params.planes.empty()
                ? std::string(
                      "with [[plane]] tables each plane has its own law: mu, e_n, e_t in "
@@ -358,7 +429,7 @@ std::vector<KeySpec> schema(const CaseSpec& c) {
   } else if (c.model == "rigid-rotor") {
     rigid_rotor_keys(b, c);
   } else if (c.model == "matrices") {
-    matrices_keys(b);
+    matrices_keys(b, c);
   }
   contact_and_load_keys(b);
   if (find_model(c.model)) initial_keys(b, c);
@@ -483,6 +554,7 @@ class Loader {
   /// their lines), so that every key of a plane is read, checked and named like any other:
   /// plane.2.mu. A [plane] table or a value that is not an array of tables is refused.
   void split_planes(toml::table& doc) {
+    split_nodes(doc);
     toml::node* n = doc.get("plane");
     if (!n) return;
     toml::array* arr = n->as_array();
@@ -505,6 +577,33 @@ class Loader {
     for (std::size_t k = 0; k < tables.size(); ++k)
       doc.insert(plane_section(k), std::move(tables[k]));
     planes_in_file_ = tables.size();
+  }
+
+  /// The same for a matrices model's [[contact_node]] array: sections contact_node.1, ...; a
+  /// single [contact_node] section stays the one node.
+  void split_nodes(toml::table& doc) {
+    toml::node* n = doc.get("contact_node");
+    if (!n || n->is_table()) return;
+    toml::array* arr = n->as_array();
+    if (!arr || !arr->is_array_of_tables() || arr->empty()) {
+      issue("contact_node", n, node_text(*n),
+            "must be a section [contact_node] (one node) or an array of tables, one "
+            "[[contact_node]] per contact node");
+      doc.erase("contact_node");
+      return;
+    }
+    if (arr->size() > static_cast<std::size_t>(kMaxContactNodes)) {
+      issue("contact_node", n, fmt::format("{} [[contact_node]] tables", arr->size()),
+            fmt::format("at most {} contact nodes", kMaxContactNodes));
+      doc.erase("contact_node");
+      return;
+    }
+    std::vector<toml::table> tables;
+    for (toml::node& t : *arr) tables.push_back(std::move(*t.as_table()));
+    doc.erase("contact_node");
+    for (std::size_t k = 0; k < tables.size(); ++k)
+      doc.insert(node_section(k), std::move(tables[k]));
+    nodes_in_file_ = tables.size();
   }
 
   void apply_overrides(toml::table& doc, const std::vector<std::string>& overrides) {
@@ -592,7 +691,23 @@ class Loader {
           k.set(c, w->get());
       }
     }
-    if (c.model == "matrices") read_matrices(doc, c);
+    if (c.model == "matrices") {
+      // the contact nodes of the file and their rings' kind (the coordinates depend on it)
+      c.matrices.nodes.assign(nodes_in_file_, MatrixNode{});
+      for (std::size_t k = 0; k < nodes_in_file_; ++k) {
+        const toml::node* sec = doc.get(node_section(k));
+        const toml::node* r =
+            sec && sec->is_table() ? sec->as_table()->get("stator_rigid") : nullptr;
+        if (r && r->as_boolean()) c.matrices.nodes[k].stator.rigid = r->as_boolean()->get();
+      }
+      read_matrices(doc, c);
+    } else if (nodes_in_file_ > 0) {
+      issue("contact_node", nullptr, "",
+            fmt::format("[[contact_node]] tables are read by [model] kind = \"matrices\" only "
+                        "(this case's kind: \"{}\")",
+                        c.model));
+      nodes_in_file_ = 0;
+    }
     if (c.model == "rigid-rotor") {
       // the planes of the file (an override cannot add one) and their rings' kind, which
       // decides the coordinates
@@ -634,6 +749,25 @@ class Loader {
         continue;
       }
       if (std::find(sections.begin(), sections.end(), key) == sections.end()) {
+        if (key.rfind("contact_node.", 0) == 0) {
+          // a node's table beyond the file's [[contact_node]] tables (an override), or of
+          // another model's case (reported by read_model)
+          if (c.model == "matrices") {
+            const std::string why = fmt::format(
+                "no such contact node: the case has {} [[contact_node]] table(s), numbered "
+                "from 1",
+                nodes_in_file_);
+            const bool by_override =
+                std::any_of(overridden_.begin(), overridden_.end(),
+                            [&](const std::string& o) { return o.rfind(key + ".", 0) == 0; });
+            if (by_override) {
+              issues_.push_back({"--set", 0, key, "", why});
+            } else {
+              issue(key, &node, "", why);
+            }
+          }
+          continue;
+        }
         if (key.rfind("plane.", 0) == 0) {
           // a plane's table: of another model's case (reported by read_model), or one that an
           // override names beyond the file's [[plane]] tables
@@ -665,13 +799,6 @@ class Loader {
         continue;
       }
       const toml::table* sec = node.as_table();
-      if (!sec && key == "contact_node" && node.is_array()) {
-        issue(key, &node, node_text(node),
-              fmt::format("{} contact nodes ([[contact_node]]): one contact node for now, as a "
-                          "section [contact_node] (the solvers handle one contact)",
-                          node.as_array()->size()));
-        continue;
-      }
       if (!sec) {
         issue(key, &node, node_text(node), "must be a section ([" + key + "])");
         continue;
@@ -913,9 +1040,11 @@ class Loader {
     }
     // the rim speed R_r |omega0| against the speed no solid is rigid at (run_envelope.hpp)
     const double R = model.contact_radius(0);
-    const std::string radius_key = c.model == "matrices"     ? "contact_node.radius"
-                                   : c.params.planes.empty() ? "rotor.radius"
-                                                             : "plane.1.radius";
+    const std::string radius_key =
+        c.model == "matrices"
+            ? (c.matrices.nodes.empty() ? "contact_node.radius" : "contact_node.1.radius")
+        : c.params.planes.empty() ? "rotor.radius"
+                                  : "plane.1.radius";
     const double omega0 =
         model.spin_coordinate() >= 0 ? std::abs(model.spin(s0.t, s0.q, s0.v)) : 0.0;
     const double rim = R * omega0;
@@ -1229,21 +1358,58 @@ class Loader {
     const MatrixParams& p = c.matrices;
     const int n = p.rotor.size();
     rule(p.rotor.Jp > 0, "rotor.Jp", p.rotor.Jp, "must be > 0 (a moment of inertia)");
-    if (n >= 2) {
-      for (const auto& [key, i] :
-           {std::pair<const char*, int>{"contact_node.x", p.node.x}, {"contact_node.y", p.node.y}})
-        rule(i >= 0 && i < n, key, i,
-             fmt::format("must be the 0-based index of a coordinate of q, in [0, {}]", n - 1));
-      rule(p.node.x != p.node.y, "contact_node.y", p.node.y,
-           "must differ from contact_node.x (the node's two coordinates)");
+    if (p.nodes.empty()) {
+      if (n >= 2) {
+        for (const auto& [key, i] : {std::pair<const char*, int>{"contact_node.x", p.node.x},
+                                     {"contact_node.y", p.node.y}})
+          rule(i >= 0 && i < n, key, i,
+               fmt::format("must be the 0-based index of a coordinate of q, in [0, {}]", n - 1));
+        rule(p.node.x != p.node.y, "contact_node.y", p.node.y,
+             "must differ from contact_node.x (the node's two coordinates)");
+      }
+      rule(p.node.radius > 0, "contact_node.radius", p.node.radius, "must be > 0 (a length)");
+      rule(p.node.gap > 0, "contact_node.gap", p.node.gap, "must be > 0 (the radial clearance g0)");
+      const auto& s = p.stator;
+      if (!s.rigid) {
+        rule(s.mass > 0, "stator.mass", s.mass, "must be > 0 (a mass)");
+        rule(s.k > 0, "stator.k", s.k, "must be > 0 (a stiffness)");
+        rule(s.c >= 0, "stator.c", s.c, "must be >= 0 (a damping)");
+      }
     }
-    rule(p.node.radius > 0, "contact_node.radius", p.node.radius, "must be > 0 (a length)");
-    rule(p.node.gap > 0, "contact_node.gap", p.node.gap, "must be > 0 (the radial clearance g0)");
-    const auto& s = p.stator;
-    if (!s.rigid) {
-      rule(s.mass > 0, "stator.mass", s.mass, "must be > 0 (a mass)");
-      rule(s.k > 0, "stator.k", s.k, "must be > 0 (a stiffness)");
-      rule(s.c >= 0, "stator.c", s.c, "must be >= 0 (a damping)");
+    for (std::size_t k = 0; k < p.nodes.size(); ++k) {
+      const MatrixNode& nd = p.nodes[k];
+      const std::string sec = node_section(k) + ".";
+      if (n >= 2) {
+        for (const auto& [key, i] :
+             {std::pair<std::string, int>{sec + "x", nd.at.x}, {sec + "y", nd.at.y}}) {
+          rule(i >= 0 && i < n, key, i,
+               fmt::format("must be the 0-based index of a coordinate of q, in [0, {}]", n - 1));
+          // a coordinate belongs to one node
+          for (std::size_t j = 0; j < k; ++j) {
+            const MatrixNode& o = p.nodes[j];
+            rule(i != o.at.x && i != o.at.y, key, i,
+                 fmt::format("is already a coordinate of contact node {} ({}x = {}, {}y = {})",
+                             j + 1, node_section(j) + ".", o.at.x, node_section(j) + ".", o.at.y));
+          }
+        }
+        rule(nd.at.x != nd.at.y, sec + "y", nd.at.y,
+             "must differ from " + sec + "x (the node's two coordinates)");
+      }
+      rule(nd.at.radius > 0, sec + "radius", nd.at.radius, "must be > 0 (the seal radius)");
+      rule(nd.at.gap > 0, sec + "gap", nd.at.gap, "must be > 0 (the radial clearance g0)");
+      rule(nd.law.mu >= 0, sec + "mu", nd.law.mu, "must be >= 0 (a friction coefficient)");
+      rule(nd.law.e_n >= 0 && nd.law.e_n <= 1, sec + "e_n", nd.law.e_n,
+           "must lie in [0, 1] (a restitution)");
+      rule(nd.law.e_t >= 0 && nd.law.e_t <= 1, sec + "e_t", nd.law.e_t,
+           "must lie in [0, 1] (a restitution)");
+      if (!nd.stator.rigid) {
+        rule(nd.stator.mass > 0, sec + "stator_mass", nd.stator.mass,
+             "must be > 0 (the ring's mass)");
+        rule(nd.stator.k > 0, sec + "stator_k", nd.stator.k,
+             "must be > 0 (the ring's support stiffness)");
+        rule(nd.stator.c >= 0, sec + "stator_c", nd.stator.c,
+             "must be >= 0 (the ring's support damping)");
+      }
     }
     buildable_ = matrices_ok_;
     if (!matrices_ok_ || issues_.size() != before) return;
@@ -1337,6 +1503,7 @@ class Loader {
   std::map<std::string, const toml::node*> present_;
   bool model_known_ = true;         // [model] kind names a model of the registry
   std::size_t planes_in_file_ = 0;  // the tables of the file's [[plane]] array
+  std::size_t nodes_in_file_ = 0;   // the tables of the file's [[contact_node]] array
   // kind "matrices": the keys read_model resolved (read_values keeps them), the problems of the
   // files (reported by matrices_rules), whether every matrix was read and is valid
   std::set<std::string> read_early_;
@@ -1396,9 +1563,11 @@ std::string to_toml(const CaseSpec& c) {
   for (const CaseEntry& e : case_values(c)) {
     if (section != e.section) {
       section = e.section;
-      // a plane's section plane.K is the K-th table of the [[plane]] array
-      out += section.rfind("plane.", 0) == 0 ? std::string("\n[[plane]]\n")
-                                             : fmt::format("\n[{}]\n", section);
+      // a plane's section plane.K is the K-th table of the [[plane]] array, a node's
+      // contact_node.K the K-th of [[contact_node]]
+      out += section.rfind("plane.", 0) == 0          ? std::string("\n[[plane]]\n")
+             : section.rfind("contact_node.", 0) == 0 ? std::string("\n[[contact_node]]\n")
+                                                      : fmt::format("\n[{}]\n", section);
     }
     std::string v;
     if (const double* x = std::get_if<double>(&e.value)) {

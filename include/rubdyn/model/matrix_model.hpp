@@ -164,7 +164,7 @@ class MatrixModel final : public LagrangianModel {
   std::vector<Node> nodes_;
   int K_;
   int n_, N_, th_, xs_ = -1, ys_ = -1, ix_, iy_;  ///< (x_s, y_s, ix, iy: the first node's)
-  bool sprung_;  ///< the first node's ring is sprung
+  bool sprung_;                                   ///< the first node's ring is sprung
   std::vector<Coordinate> coords_;
   Mat L_;        ///< M = L L^T
   Mat MinvG_;    ///< M^-1 G
