@@ -13,6 +13,7 @@ and on stress scenes. Writes table.md and results.csv next to this script.
    - two rings at one plane (different rings, the same gap): the first impact hits both at once;
    - one plane in permanent contact while the other bounces (e_n = 0.5: impact sequences
      truncated as Zeno, per contact);
+   - one plane rolling (mu = 0.5: stick, the dry whip) while the other bounces (e_n = 0.5);
    - the reference ring split into two identical halves (redundant contacts: every event at both
      at once, the force shared by the minimum-norm rule) against the one-ring run;
    - four planes (K = 4, radius / gap equal at every plane).
@@ -39,8 +40,11 @@ def run(name, args, case=CASE):
     contact) read from events.csv)."""
     folder = os.path.join(OUT, name)
     t0 = time.perf_counter()
-    subprocess.run([RUBDYN, "run", case, "--out", folder, "--quiet", "--t-end", T_END] + args,
-                   check=True, stdout=subprocess.DEVNULL)
+    # exit 3: the run ended early for a numerical reason (kept, with its termination)
+    r = subprocess.run([RUBDYN, "run", case, "--out", folder, "--quiet", "--t-end", T_END] + args,
+                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    if r.returncode not in (0, 3):
+        raise RuntimeError("rubdyn run %s ended with exit code %d" % (name, r.returncode))
     wall = time.perf_counter() - t0
     summary, grid, _ = read_output(folder, DT)
     import csv
@@ -177,6 +181,9 @@ def main():
         ("plane 1 in contact, plane 2 bouncing (e_n = 0.5)", CASE,
          ["--set", "plane.1.mu=0.3", "--set", "plane.2.gap=1.02e-4", "--set", "plane.2.e_n=0.5"],
          (1, 2), None),
+        ("plane 1 rolling (mu = 0.5), plane 2 bouncing (e_n = 0.5)", CASE,
+         ["--set", "plane.1.mu=0.5", "--set", "plane.2.gap=1.02e-4", "--set", "plane.2.e_n=0.5"],
+         (1, 2), None),
         ("reference ring split in two halves (redundant)", split, [], (1, 2),
          os.path.join(ROOT, "cases", "reference.toml")),
         ("four planes (K = 4)", four, [], (1, 2, 3, 4), None),
@@ -206,11 +213,24 @@ def main():
         rows.append({"study": "stress", "run": name, "error_R": d, "error_ring2": float("nan"),
                      "energy_residual": s["energy_residual"], "steps": s["steps"],
                      "wall_seconds": s["wall_seconds"], "termination": s["termination"]})
+    lines += ["", "The rolling scene ends as `chattering` (the guard of 1e6 events per simulated "
+              "second): plane 1 sticks in the dry whip with F_N about 4.7e7 N, and plane 2, "
+              "squeezed by that motion, is re-hit every 4 ns with the same speed (v_N- = 0.0096, "
+              "v_N+ = 0.0048 m/s; bounce height 4.8e-12 m, above the Zeno truncation's "
+              "1.1e-12 m: not an accumulation), each impact's joint impulse letting plane 1 slip "
+              "for 8 ns. A sustained micro-chatter of the model with e_n = 0.5, which an "
+              "event-driven method cannot step through; the run ends with its typed termination "
+              "and keeps its output. (Read from out/planes/scene2-event/events.csv.) Its energy "
+              "residual (1e-7 of the flows, where the other scenes close to 1e-13) comes with "
+              "friction working at 2e5 W against 4.7e7 N, and is not explained yet; the "
+              "cross-check says nothing here (mj-proj at h = 1e-7 s steps over the 4 ns "
+              "bounces, and the whip amplifies any difference)."]
     lines += ["", "Reading: section 1 says how far the event solver's answer moves with its "
               "tolerance (the reference's own error is below the tightest row); section 2 puts "
-              "Moreau-Jean's first-order error beside it; section 3 says every scene ends "
-              "complete, with its balance closed and no penetration beyond round-off, and how "
-              "far an independent scheme (or, for the split ring, the one-ring model) is.", ""]
+              "Moreau-Jean's first-order error beside it; section 3 says every scene but "
+              "the rolling one ends complete, with its balance closed and no penetration beyond "
+              "round-off, and how far an independent scheme (or, for the split ring, the "
+              "one-ring model) is.", ""]
     with open(os.path.join(HERE, "table.md"), "w") as f:
         f.write("\n".join(lines))
     write_csv(os.path.join(HERE, "results.csv"), rows)
