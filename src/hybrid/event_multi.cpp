@@ -985,15 +985,8 @@ class MultiIntegrator {
     const ContactKinematics& c = cur_->ops().at(k);
     const SwitchTolerances& tl = tol(k);
     if (c.d_N > tl.graze_band) return true;
-    EventRecord e;
-    e.t = t;
+    EventRecord e = grazing_event(t, c);
     e.contact = k;
-    e.kind = EventKind::Grazing;
-    e.phase_before = Phase::Free;
-    e.d_N = c.d_N;
-    e.v_N_minus = e.v_N_plus = c.v_N;
-    e.v_t_minus = e.v_t_plus = c.v_t;
-    e.witness = "v_N (gap minimum within tolerance of 0)";
     if (c.d_N < -tl.graze_tol) {
       restarted = true;
       const double tc = locate_onset(k, t, q_ev_, v_ev_);

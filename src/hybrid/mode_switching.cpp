@@ -145,8 +145,7 @@ ModeSwitcher::GapMinimum ModeSwitcher::classify_gap_minimum(double t, VecIn q, V
   return op_.b_N >= 0.0 ? GapMinimum::TouchAndGo : GapMinimum::Grazing;
 }
 
-EventRecord ModeSwitcher::grazing_record(double t, VecIn q, VecIn v, bool touch_and_go) const {
-  const ContactKinematics c = m_.contact(0, t, q, v);
+EventRecord grazing_event(double t, const ContactKinematics& c) {
   EventRecord e;
   e.t = t;
   e.kind = EventKind::Grazing;
@@ -155,6 +154,11 @@ EventRecord ModeSwitcher::grazing_record(double t, VecIn q, VecIn v, bool touch_
   e.v_N_minus = e.v_N_plus = c.v_N;
   e.v_t_minus = e.v_t_plus = c.v_t;
   e.witness = "v_N (gap minimum within tolerance of 0)";
+  return e;
+}
+
+EventRecord ModeSwitcher::grazing_record(double t, VecIn q, VecIn v, bool touch_and_go) const {
+  EventRecord e = grazing_event(t, m_.contact(0, t, q, v));
   if (touch_and_go) {
     e.phase_after = Phase::Free;
     e.note = "touch and go: the free normal acceleration is >= 0";

@@ -74,6 +74,10 @@ class ModeSwitcher {
   mutable ContactOperators op_;
 };
 
+/// The record of a gap minimum at t with the contact's kinematics c there (kind grazing, phase
+/// free before; the caller sets what comes after): shared by both integrators.
+EventRecord grazing_event(double t, const ContactKinematics& c);
+
 /// Bounds on events: more than kMaxSameInstant at one instant (mode switching that loops) or
 /// more than max_per_second per unit of simulated time over the last kChatterWindow
 /// (chattering) end the run (decision_tolerances.hpp).

@@ -552,58 +552,42 @@ class Loader {
 
   /// The [[plane]] array's tables become the sections plane.1, plane.2, ... (their nodes keep
   /// their lines), so that every key of a plane is read, checked and named like any other:
-  /// plane.2.mu. A [plane] table or a value that is not an array of tables is refused.
+  /// plane.2.mu. A [plane] table or a value that is not an array of tables is refused. The same
+  /// for a matrices model's [[contact_node]] array (contact_node.1, ...), where a single
+  /// [contact_node] section stays the one node.
   void split_planes(toml::table& doc) {
-    split_nodes(doc);
-    toml::node* n = doc.get("plane");
-    if (!n) return;
+    planes_in_file_ = split_array(
+        doc, "plane", kMaxPlanes, "planes", plane_section,
+        "must be an array of tables: one [[plane]] table per rub plane (at least one)");
+    if (const toml::node* n = doc.get("contact_node"); n && n->is_table()) return;
+    nodes_in_file_ = split_array(doc, "contact_node", kMaxContactNodes, "contact nodes",
+                                 node_section,
+                                 "must be a section [contact_node] (one node) or an array of "
+                                 "tables, one [[contact_node]] per contact node");
+  }
+  /// The tables of the array `name` as sections section(k); their number (0: none or refused).
+  std::size_t split_array(toml::table& doc, const std::string& name, int most, const char* what,
+                          std::string (*section)(std::size_t), const char* shape_rule) {
+    toml::node* n = doc.get(name);
+    if (!n) return 0;
     toml::array* arr = n->as_array();
     if (!arr || !arr->is_array_of_tables() || arr->empty()) {
-      issue("plane", n, node_text(*n),
-            "must be an array of tables: one [[plane]] table per rub plane (at least one)");
-      doc.erase("plane");
-      return;
+      issue(name, n, node_text(*n), shape_rule);
+      doc.erase(name);
+      return 0;
     }
-    if (arr->size() > static_cast<std::size_t>(kMaxPlanes)) {
-      issue("plane", n, fmt::format("{} [[plane]] tables", arr->size()),
-            fmt::format("at most {} planes", kMaxPlanes));
-      doc.erase("plane");
-      return;
+    if (arr->size() > static_cast<std::size_t>(most)) {
+      issue(name, n, fmt::format("{} [[{}]] tables", arr->size(), name),
+            fmt::format("at most {} {}", most, what));
+      doc.erase(name);
+      return 0;
     }
     // (moved, not copied: a copied node forgets its line)
     std::vector<toml::table> tables;
     for (toml::node& t : *arr) tables.push_back(std::move(*t.as_table()));
-    doc.erase("plane");
-    for (std::size_t k = 0; k < tables.size(); ++k)
-      doc.insert(plane_section(k), std::move(tables[k]));
-    planes_in_file_ = tables.size();
-  }
-
-  /// The same for a matrices model's [[contact_node]] array: sections contact_node.1, ...; a
-  /// single [contact_node] section stays the one node.
-  void split_nodes(toml::table& doc) {
-    toml::node* n = doc.get("contact_node");
-    if (!n || n->is_table()) return;
-    toml::array* arr = n->as_array();
-    if (!arr || !arr->is_array_of_tables() || arr->empty()) {
-      issue("contact_node", n, node_text(*n),
-            "must be a section [contact_node] (one node) or an array of tables, one "
-            "[[contact_node]] per contact node");
-      doc.erase("contact_node");
-      return;
-    }
-    if (arr->size() > static_cast<std::size_t>(kMaxContactNodes)) {
-      issue("contact_node", n, fmt::format("{} [[contact_node]] tables", arr->size()),
-            fmt::format("at most {} contact nodes", kMaxContactNodes));
-      doc.erase("contact_node");
-      return;
-    }
-    std::vector<toml::table> tables;
-    for (toml::node& t : *arr) tables.push_back(std::move(*t.as_table()));
-    doc.erase("contact_node");
-    for (std::size_t k = 0; k < tables.size(); ++k)
-      doc.insert(node_section(k), std::move(tables[k]));
-    nodes_in_file_ = tables.size();
+    doc.erase(name);
+    for (std::size_t k = 0; k < tables.size(); ++k) doc.insert(section(k), std::move(tables[k]));
+    return tables.size();
   }
 
   void apply_overrides(toml::table& doc, const std::vector<std::string>& overrides) {
