@@ -556,14 +556,14 @@ class Loader {
   /// for a matrices model's [[contact_node]] array (contact_node.1, ...), where a single
   /// [contact_node] section stays the one node.
   void split_planes(toml::table& doc) {
-    planes_in_file_ = split_array(
-        doc, "plane", kMaxPlanes, "planes", plane_section,
-        "must be an array of tables: one [[plane]] table per rub plane (at least one)");
+    planes_in_file_ =
+        split_array(doc, "plane", kMaxPlanes, "planes", plane_section,
+                    "must be an array of tables: one [[plane]] table per rub plane (at least one)");
     if (const toml::node* n = doc.get("contact_node"); n && n->is_table()) return;
-    nodes_in_file_ = split_array(doc, "contact_node", kMaxContactNodes, "contact nodes",
-                                 node_section,
-                                 "must be a section [contact_node] (one node) or an array of "
-                                 "tables, one [[contact_node]] per contact node");
+    nodes_in_file_ =
+        split_array(doc, "contact_node", kMaxContactNodes, "contact nodes", node_section,
+                    "must be a section [contact_node] (one node) or an array of "
+                    "tables, one [[contact_node]] per contact node");
   }
   /// The tables of the array `name` as sections section(k); their number (0: none or refused).
   std::size_t split_array(toml::table& doc, const std::string& name, int most, const char* what,

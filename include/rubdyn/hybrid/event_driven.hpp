@@ -108,8 +108,8 @@ std::vector<OptionProblem> event_driven_option_problems(const EventDrivenOptions
 /// termination, a message, and everything produced so far. Throws std::invalid_argument, before
 /// anything reaches the sink, listing every rule the options break (event_driven_option_problems)
 /// or for a model without a contact or with more than 8 (several contacts run the K-contact
-/// integrator of src/hybrid/event_multi.hpp; one contact this one). omega (monitor, omega_lim) is the rate of the model's
-/// spin_coordinate(); a model without one has no omega_lim witness.
+/// integrator of src/hybrid/event_multi.hpp; one contact this one). omega (monitor, omega_lim) is
+/// the rate of the model's spin_coordinate(); a model without one has no omega_lim witness.
 RunSummary run_event_driven(const LagrangianModel& model, const MechanicalState& initial,
                             double t_end, const EventDrivenOptions& opt, OutputSink& sink);
 
