@@ -222,27 +222,28 @@ EnumResult ContactSetSolver::EnumWork::run(MatIn W, VecIn u0, std::span<const Se
         ++m;
       }
     }
+    // entry (e, k) of the mode's system: a slip's column is W_{., N} + ct W_{., T} (exactly
+    // A_NN - mu s A_NT for K = 1)
+    const auto entry = [&](int e, int k) {
+      const int j = unk_col[k];
+      return unk_contact[k] >= 0 && unk_ct[k] != 0.0 ? W(row[e], j) + unk_ct[k] * W(row[e], j + 1)
+                                                     : W(row[e], j);
+    };
     for (int e = 0; e < m; ++e) {
-      for (int k = 0; k < m; ++k) {
-        const int j = unk_col[k];
-        // a slip's column: W_{., N} + ct W_{., T} (exactly A_NN - mu s A_NT for K = 1)
-        a[e][k] = unk_contact[k] >= 0 && unk_ct[k] != 0.0
-                      ? W(row[e], j) + unk_ct[k] * W(row[e], j + 1)
-                      : W(row[e], j);
-      }
+      for (int k = 0; k < m; ++k) a[e][k] = entry(e, k);
       rhs[e] = -u0(row[e]);
     }
     double kappa = 1.0;
-    CapMat<kCapRows> A0(m, m);  // the system before elimination (for a singular one)
-    CapVec<kCapRows> b0(m);
-    for (int e = 0; e < m; ++e) {
-      b0[e] = rhs[e];
-      for (int k = 0; k < m; ++k) A0(e, k) = a[e][k];
-    }
     if (!solve_full_pivot(a, rhs, m, x, kappa)) {
       // singular: redundant contacts (their forces indeterminate) are a candidate with the
-      // minimum-norm forces when the system is consistent; otherwise ill-posed, no candidate
-      CapVec<kCapRows> xm;
+      // minimum-norm forces when the system is consistent; otherwise ill-posed, no candidate.
+      // (The elimination overwrote the system: it is built again, only here.)
+      CapMat<kCapRows> A0(m, m);
+      CapVec<kCapRows> b0(m), xm;
+      for (int e = 0; e < m; ++e) {
+        for (int k = 0; k < m; ++k) A0(e, k) = entry(e, k);
+        b0[e] = -u0(row[e]);
+      }
       const MinNormResult mn = min_norm_solve<kCapRows>(A0, b0, xm, kSingularPivot);
       if (!mn.consistent) continue;
       for (int k = 0; k < m; ++k) x[k] = xm[k];

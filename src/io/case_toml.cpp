@@ -733,32 +733,20 @@ class Loader {
         continue;
       }
       if (std::find(sections.begin(), sections.end(), key) == sections.end()) {
-        if (key.rfind("contact_node.", 0) == 0) {
-          // a node's table beyond the file's [[contact_node]] tables (an override), or of
-          // another model's case (reported by read_model)
-          if (c.model == "matrices") {
-            const std::string why = fmt::format(
-                "no such contact node: the case has {} [[contact_node]] table(s), numbered "
-                "from 1",
-                nodes_in_file_);
-            const bool by_override =
-                std::any_of(overridden_.begin(), overridden_.end(),
-                            [&](const std::string& o) { return o.rfind(key + ".", 0) == 0; });
-            if (by_override) {
-              issues_.push_back({"--set", 0, key, "", why});
-            } else {
-              issue(key, &node, "", why);
-            }
-          }
-          continue;
-        }
-        if (key.rfind("plane.", 0) == 0) {
-          // a plane's table: of another model's case (reported by read_model), or one that an
-          // override names beyond the file's [[plane]] tables
-          if (c.model == "rigid-rotor") {
+        // a table of a [[plane]] or [[contact_node]] array: of another model's case (reported
+        // by read_model), or one that an override names beyond the file's tables
+        const bool plane = key.rfind("plane.", 0) == 0;
+        if (plane || key.rfind("contact_node.", 0) == 0) {
+          if (c.model == (plane ? "rigid-rotor" : "matrices")) {
             const std::string why =
-                fmt::format("no such plane: the case has {} [[plane]] table(s), numbered from 1",
-                            planes_in_file_);
+                plane ? fmt::format(
+                            "no such plane: the case has {} [[plane]] table(s), "
+                            "numbered from 1",
+                            planes_in_file_)
+                      : fmt::format(
+                            "no such contact node: the case has {} [[contact_node]] "
+                            "table(s), numbered from 1",
+                            nodes_in_file_);
             const bool by_override =
                 std::any_of(overridden_.begin(), overridden_.end(),
                             [&](const std::string& o) { return o.rfind(key + ".", 0) == 0; });
