@@ -112,6 +112,166 @@ Level level_of(double margin, double tol) {
   return margin > tol ? Level::Strict : (margin >= -tol ? Level::Boundary : Level::Violated);
 }
 
+/// |u0|_inf and |W|_inf (row sums) of the data: the scale of the round-off bands.
+struct DataScale {
+  double u0_max = 0.0, W_max = 0.0;
+};
+DataScale data_scale(MatIn W, VecIn u0, int K) {
+  DataScale d;
+  for (int e = 0; e < 2 * K; ++e) {
+    d.u0_max = std::max(d.u0_max, std::abs(u0(e)));
+    double row_sum = 0.0;
+    for (int j = 0; j < 2 * K; ++j) row_sum += std::abs(W(e, j));
+    d.W_max = std::max(d.W_max, row_sum);
+  }
+  return d;
+}
+
+/// One combination of modes solved and judged: its r, u, its weakest margin's level, the
+/// contacts that fail or sit in the band, and its place in tie rule 2's order.
+struct ModeEval {
+  double r[kCapRows], u[kCapRows];
+  Level level = Level::Strict;
+  int failing = 0, n_closed = 0, n_slip = 0, lex = 0;
+  double violation = 0.0;      // sum over the failing contacts, in units of the band
+  std::uint8_t fail_mask = 0;  // bit i: contact i violates the law
+  std::uint8_t band_mask = 0;  // bit i: contact i has a margin within the band
+};
+
+/// Solves combination `mode` (one mode per contact) and judges it; false when its system is
+/// singular and inconsistent (ill-posed: not a candidate). The enumeration and the first-guess
+/// path (solve_guess) both call this, so that a guess taken is the enumeration's answer to the bit.
+bool eval_mode(MatIn W, VecIn u0, std::span<const SetContact> c, const Phase* mode, SetBand band,
+               const DataScale& scale, ModeEval& ev) {
+  const int K = static_cast<int>(c.size());
+  double a[kCapRows][kCapRows], rhs[kCapRows], x[kCapRows];
+  int row[kCapRows];
+  int n_closed = 0, n_slip = 0, lex = 0;
+  for (int i = 0; i < K; ++i) {
+    n_closed += mode[i] != Phase::Free;
+    n_slip += (mode[i] == Phase::SlipPos || mode[i] == Phase::SlipNeg) && c[i].mu > 0.0;
+    lex = lex * 4 + rank_of(mode[i]);
+  }
+  // unknowns: r_N of each closed contact (with r_T = ct r_N on a slip), r_T of each stick;
+  // equations: u_N = 0 of each closed contact, u_T = 0 of each stick
+  int unk_col[kCapRows];  // the column of W of the unknown
+  double unk_ct[kCapRows];
+  int unk_contact[kCapRows];
+  int m = 0;
+  for (int i = 0; i < K; ++i) {
+    if (mode[i] == Phase::Free) continue;
+    double ct = 0.0;
+    if (mode[i] == Phase::SlipPos || mode[i] == Phase::SlipNeg) {
+      const double s = mode[i] == Phase::SlipPos ? 1.0 : -1.0;
+      ct = -c[i].mu * s;
+    }
+    row[m] = 2 * i;
+    unk_col[m] = 2 * i;
+    unk_ct[m] = ct;
+    unk_contact[m] = i;
+    ++m;
+    if (mode[i] == Phase::Stick) {
+      row[m] = 2 * i + 1;
+      unk_col[m] = 2 * i + 1;
+      unk_ct[m] = 0.0;
+      unk_contact[m] = -1;  // r_T of a stick
+      ++m;
+    }
+  }
+  // entry (e, k) of the mode's system: a slip's column is W_{., N} + ct W_{., T} (exactly
+  // A_NN - mu s A_NT for K = 1)
+  const auto entry = [&](int e, int k) {
+    const int j = unk_col[k];
+    return unk_contact[k] >= 0 && unk_ct[k] != 0.0 ? W(row[e], j) + unk_ct[k] * W(row[e], j + 1)
+                                                   : W(row[e], j);
+  };
+  for (int e = 0; e < m; ++e) {
+    for (int k = 0; k < m; ++k) a[e][k] = entry(e, k);
+    rhs[e] = -u0(row[e]);
+  }
+  double kappa = 1.0;
+  if (!solve_full_pivot(a, rhs, m, x, kappa)) {
+    // singular: redundant contacts (their forces indeterminate) are a candidate with the
+    // minimum-norm forces when the system is consistent; otherwise ill-posed, no candidate.
+    // (The elimination overwrote the system: it is built again, only here.)
+    CapMat<kCapRows> A0(m, m);
+    CapVec<kCapRows> b0(m), xm;
+    for (int e = 0; e < m; ++e) {
+      for (int k = 0; k < m; ++k) A0(e, k) = entry(e, k);
+      b0[e] = -u0(row[e]);
+    }
+    const MinNormResult mn = min_norm_solve<kCapRows>(A0, b0, xm, kSingularPivot);
+    if (!mn.consistent) return false;
+    for (int k = 0; k < m; ++k) x[k] = xm[k];
+    kappa = mn.kappa;
+  }
+  double(&r)[kCapRows] = ev.r;
+  double(&u)[kCapRows] = ev.u;
+  std::fill_n(r, kCapRows, 0.0);
+  for (int k = 0; k < m; ++k) {
+    r[unk_col[k]] = x[k];
+    if (unk_contact[k] >= 0 && mode[unk_contact[k]] != Phase::Stick)
+      r[unk_col[k] + 1] = unk_ct[k] * x[k];
+  }
+  for (int e = 0; e < 2 * K; ++e) {
+    double s = u0(e);
+    for (int j = 0; j < 2 * K; ++j) s += W(e, j) * r[j];
+    u[e] = s;
+  }
+  // the margins of each contact, each with its band: the data's (tol_u, tol_r) or, when larger,
+  // the round-off of this mode's solve, m kappa eps times the size of the terms (|u0| + |W| |r|
+  // for u, |r| for r): a margin that is zero in exact arithmetic (redundant contacts) is then
+  // not decided by the noise of an ill-conditioned solve
+  double r_max = 0.0;
+  for (int e = 0; e < 2 * K; ++e) r_max = std::max(r_max, std::abs(r[e]));
+  const double solve_err = m * kappa * std::numeric_limits<double>::epsilon();
+  const double tol_u = std::max(band.tol_u, solve_err * (scale.u0_max + scale.W_max * r_max));
+  const double tol_r = std::max(band.tol_r, solve_err * r_max);
+  Level lv = Level::Strict;
+  int failing = 0;
+  double violation = 0.0;
+  std::uint8_t fail_mask = 0, band_mask = 0;
+  for (int i = 0; i < K; ++i) {
+    const double rN = r[2 * i], rT = r[2 * i + 1], uN = u[2 * i], uT = u[2 * i + 1];
+    Level li = Level::Strict;
+    double vi = 0.0;  // violation in units of the band
+    auto margin = [&](double value, double tol) {
+      li = std::min(li, level_of(value, tol));
+      vi = std::max(vi, -value / tol);
+    };
+    switch (mode[i]) {
+      case Phase::Free: margin(uN, tol_u); break;
+      case Phase::Stick:
+        margin(rN, tol_r);
+        margin(c[i].mu * rN - std::abs(rT), c[i].mu * tol_r);
+        break;
+      case Phase::SlipPos:
+      case Phase::SlipNeg:
+        margin(rN, tol_r);
+        if (c[i].sliding == 0 && c[i].mu > 0.0)
+          margin((mode[i] == Phase::SlipPos ? 1.0 : -1.0) * uT, tol_u);
+        break;
+    }
+    lv = std::min(lv, li);
+    if (li == Level::Violated) {
+      ++failing;
+      violation += vi;
+      fail_mask |= static_cast<std::uint8_t>(1u << i);
+    } else if (li == Level::Boundary) {
+      band_mask |= static_cast<std::uint8_t>(1u << i);
+    }
+  }
+  ev.level = lv;
+  ev.failing = failing;
+  ev.violation = violation;
+  ev.fail_mask = fail_mask;
+  ev.band_mask = band_mask;
+  ev.n_closed = n_closed;
+  ev.n_slip = n_slip;
+  ev.lex = lex;
+  return true;
+}
+
 /// The enumeration's result (K <= kCapK).
 struct EnumResult {
   SetOutcome outcome = SetOutcome::NoSolution;
@@ -166,13 +326,7 @@ EnumResult ContactSetSolver::EnumWork::run(MatIn W, VecIn u0, std::span<const Se
   }
   EnumResult out;
   n = 0;
-  double u0_max = 0.0, W_max = 0.0;  // |u0|_inf, |W|_inf
-  for (int e = 0; e < 2 * K; ++e) {
-    u0_max = std::max(u0_max, std::abs(u0(e)));
-    double row_sum = 0.0;
-    for (int j = 0; j < 2 * K; ++j) row_sum += std::abs(W(e, j));
-    W_max = std::max(W_max, row_sum);
-  }
+  const DataScale scale = data_scale(W, u0, K);
   // the least violated combination (NoSolution's contacts involved)
   int lv_failing = K + 1, lv_key = 0;
   double lv_total = std::numeric_limits<double>::infinity();
@@ -180,8 +334,6 @@ EnumResult ContactSetSolver::EnumWork::run(MatIn W, VecIn u0, std::span<const Se
 
   int idx[kCapK] = {};
   Phase mode[kCapK];
-  double a[kCapRows][kCapRows], rhs[kCapRows], x[kCapRows];
-  int row[kCapRows];
   for (int comb = 0; comb < total; ++comb) {
     if (comb > 0) {  // odometer, the last contact fastest
       for (int i = K - 1; i >= 0; --i) {
@@ -189,121 +341,16 @@ EnumResult ContactSetSolver::EnumWork::run(MatIn W, VecIn u0, std::span<const Se
         idx[i] = 0;
       }
     }
-    int n_closed = 0, n_slip = 0, lex = 0;
-    for (int i = 0; i < K; ++i) {
-      mode[i] = list[i][idx[i]];
-      n_closed += mode[i] != Phase::Free;
-      n_slip += (mode[i] == Phase::SlipPos || mode[i] == Phase::SlipNeg) && c[i].mu > 0.0;
-      lex = lex * 4 + rank_of(mode[i]);
-    }
-    // unknowns: r_N of each closed contact (with r_T = ct r_N on a slip), r_T of each stick;
-    // equations: u_N = 0 of each closed contact, u_T = 0 of each stick
-    int unk_col[kCapRows];  // the column of W of the unknown
-    double unk_ct[kCapRows];
-    int unk_contact[kCapRows];
-    int m = 0;
-    for (int i = 0; i < K; ++i) {
-      if (mode[i] == Phase::Free) continue;
-      double ct = 0.0;
-      if (mode[i] == Phase::SlipPos || mode[i] == Phase::SlipNeg) {
-        const double s = mode[i] == Phase::SlipPos ? 1.0 : -1.0;
-        ct = -c[i].mu * s;
-      }
-      row[m] = 2 * i;
-      unk_col[m] = 2 * i;
-      unk_ct[m] = ct;
-      unk_contact[m] = i;
-      ++m;
-      if (mode[i] == Phase::Stick) {
-        row[m] = 2 * i + 1;
-        unk_col[m] = 2 * i + 1;
-        unk_ct[m] = 0.0;
-        unk_contact[m] = -1;  // r_T of a stick
-        ++m;
-      }
-    }
-    // entry (e, k) of the mode's system: a slip's column is W_{., N} + ct W_{., T} (exactly
-    // A_NN - mu s A_NT for K = 1)
-    const auto entry = [&](int e, int k) {
-      const int j = unk_col[k];
-      return unk_contact[k] >= 0 && unk_ct[k] != 0.0 ? W(row[e], j) + unk_ct[k] * W(row[e], j + 1)
-                                                     : W(row[e], j);
-    };
-    for (int e = 0; e < m; ++e) {
-      for (int k = 0; k < m; ++k) a[e][k] = entry(e, k);
-      rhs[e] = -u0(row[e]);
-    }
-    double kappa = 1.0;
-    if (!solve_full_pivot(a, rhs, m, x, kappa)) {
-      // singular: redundant contacts (their forces indeterminate) are a candidate with the
-      // minimum-norm forces when the system is consistent; otherwise ill-posed, no candidate.
-      // (The elimination overwrote the system: it is built again, only here.)
-      CapMat<kCapRows> A0(m, m);
-      CapVec<kCapRows> b0(m), xm;
-      for (int e = 0; e < m; ++e) {
-        for (int k = 0; k < m; ++k) A0(e, k) = entry(e, k);
-        b0[e] = -u0(row[e]);
-      }
-      const MinNormResult mn = min_norm_solve<kCapRows>(A0, b0, xm, kSingularPivot);
-      if (!mn.consistent) continue;
-      for (int k = 0; k < m; ++k) x[k] = xm[k];
-      kappa = mn.kappa;
-    }
+    for (int i = 0; i < K; ++i) mode[i] = list[i][idx[i]];
+    ModeEval ev;
+    if (!eval_mode(W, u0, c, mode, band, scale, ev)) continue;
     ++out.n_candidates;
-    double r[kCapRows] = {}, u[kCapRows];
-    for (int k = 0; k < m; ++k) {
-      r[unk_col[k]] = x[k];
-      if (unk_contact[k] >= 0 && mode[unk_contact[k]] != Phase::Stick)
-        r[unk_col[k] + 1] = unk_ct[k] * x[k];
-    }
-    for (int e = 0; e < 2 * K; ++e) {
-      double s = u0(e);
-      for (int j = 0; j < 2 * K; ++j) s += W(e, j) * r[j];
-      u[e] = s;
-    }
-    // the margins of each contact, each with its band: the data's (tol_u, tol_r) or, when larger,
-    // the round-off of this mode's solve, m kappa eps times the size of the terms (|u0| + |W| |r|
-    // for u, |r| for r): a margin that is zero in exact arithmetic (redundant contacts) is then
-    // not decided by the noise of an ill-conditioned solve
-    double r_max = 0.0;
-    for (int e = 0; e < 2 * K; ++e) r_max = std::max(r_max, std::abs(r[e]));
-    const double solve_err = m * kappa * std::numeric_limits<double>::epsilon();
-    const double tol_u = std::max(band.tol_u, solve_err * (u0_max + W_max * r_max));
-    const double tol_r = std::max(band.tol_r, solve_err * r_max);
-    Level lv = Level::Strict;
-    int failing = 0;
-    double violation = 0.0;
-    std::uint8_t fail_mask = 0, band_mask = 0;
-    for (int i = 0; i < K; ++i) {
-      const double rN = r[2 * i], rT = r[2 * i + 1], uN = u[2 * i], uT = u[2 * i + 1];
-      Level li = Level::Strict;
-      double vi = 0.0;  // violation in units of the band
-      auto margin = [&](double value, double tol) {
-        li = std::min(li, level_of(value, tol));
-        vi = std::max(vi, -value / tol);
-      };
-      switch (mode[i]) {
-        case Phase::Free: margin(uN, tol_u); break;
-        case Phase::Stick:
-          margin(rN, tol_r);
-          margin(c[i].mu * rN - std::abs(rT), c[i].mu * tol_r);
-          break;
-        case Phase::SlipPos:
-        case Phase::SlipNeg:
-          margin(rN, tol_r);
-          if (c[i].sliding == 0 && c[i].mu > 0.0)
-            margin((mode[i] == Phase::SlipPos ? 1.0 : -1.0) * uT, tol_u);
-          break;
-      }
-      lv = std::min(lv, li);
-      if (li == Level::Violated) {
-        ++failing;
-        violation += vi;
-        fail_mask |= static_cast<std::uint8_t>(1u << i);
-      } else if (li == Level::Boundary) {
-        band_mask |= static_cast<std::uint8_t>(1u << i);
-      }
-    }
+    const double(&r)[kCapRows] = ev.r;
+    const double(&u)[kCapRows] = ev.u;
+    const Level lv = ev.level;
+    const int failing = ev.failing, n_closed = ev.n_closed, n_slip = ev.n_slip, lex = ev.lex;
+    const double violation = ev.violation;
+    const std::uint8_t fail_mask = ev.fail_mask, band_mask = ev.band_mask;
     const int key = (n_closed * (kCapK + 1) + n_slip) * kCapModes + lex;
     if (lv == Level::Violated) {
       if (failing < lv_failing ||
@@ -387,6 +434,97 @@ EnumResult ContactSetSolver::EnumWork::run(MatIn W, VecIn u0, std::span<const Se
   return out;
 }
 
+namespace {
+
+/// unique_by_monotonicity for K contacts known at compile time (the loops unrolled: a
+/// Moreau-Jean step calls it once per Delassus matrix; measured 105 ns for K = 2 with K a
+/// run-time value)
+template <int K>
+bool certify_unique(MatIn W, std::span<const SetContact> c) {
+  constexpr int n = 2 * K;
+  // W copied once into plain arrays (a Moreau-Jean step calls this once per Delassus matrix)
+  double w[n][n], S[n][n], wT[K];
+  bool finite = true;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      w[i][j] = W(i, j);
+      finite = finite && std::isfinite(w[i][j]);
+    }
+  if (!finite) return false;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) S[i][j] = 0.5 * (w[i][j] + w[j][i]);
+  for (int k = 0; k < K; ++k) {
+    double s2 = 0.0;
+    for (int j = 0; j < n; ++j) s2 += w[2 * k + 1][j] * w[2 * k + 1][j];
+    wT[k] = std::sqrt(s2);
+  }
+  for (const double t : {1.0, 0.5, 2.0, 0.25, 4.0}) {
+    double A[n][n];
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) A[i][j] = S[i][j];
+    for (int k = 0; k < K; ++k) {
+      if (c[k].mu == 0.0 || wT[k] == 0.0) continue;  // no friction term for this contact
+      // a_k = t / |w_Tk|: (mu/2) a_k w_Tk w_Tk^T and (mu/2) / a_k on the normal diagonal
+      const double f = 0.5 * c[k].mu * t / wT[k];
+      const double* wr = w[2 * k + 1];
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) A[i][j] -= f * wr[i] * wr[j];
+      A[2 * k][2 * k] -= 0.5 * c[k].mu * wT[k] / t;
+    }
+    double amax = 0.0;
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) amax = std::max(amax, std::abs(A[i][j]));
+    const double shift = 1e-10 * n * amax;
+    // Gershgorin first (no division): every row's diagonal above the sum of its other entries'
+    // magnitudes, by more than the shift, puts every eigenvalue of the symmetric A above it
+    bool dominant = amax > 0.0;
+    for (int i = 0; i < n && dominant; ++i) {
+      double off = 0.0;
+      for (int j = 0; j < n; ++j)
+        if (j != i) off += std::abs(A[i][j]);
+      dominant = A[i][i] - off > shift;
+    }
+    if (dominant) return true;
+    // A - shift I = L D L^T (unit lower L in the lower triangle, D on the diagonal): positive
+    // definite when every d_j > 0; one reciprocal per column and no square root (this is a
+    // chain of dependent divisions: its latency is the cost)
+    bool pd = amax > 0.0;
+    for (int j = 0; j < n && pd; ++j) {
+      double d = A[j][j] - shift;
+      for (int k = 0; k < j; ++k) d -= A[j][k] * A[j][k] * A[k][k];
+      if (!(d > 0.0)) {
+        pd = false;
+        break;
+      }
+      A[j][j] = d;
+      const double inv = 1.0 / d;
+      for (int i = j + 1; i < n; ++i) {
+        double s = A[i][j];
+        for (int k = 0; k < j; ++k) s -= A[i][k] * A[j][k] * A[k][k];
+        A[i][j] = s * inv;
+      }
+    }
+    if (pd) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+bool unique_by_monotonicity(MatIn W, std::span<const SetContact> c) {
+  const int K = static_cast<int>(c.size());
+  if (K > kCapK || W.rows() != 2 * K || W.cols() != 2 * K) return false;
+  for (const SetContact& ci : c)
+    if (ci.sliding != 0) return false;
+  switch (K) {
+    case 0: return true;  // no contact: the empty solution
+    case 1: return certify_unique<1>(W, c);
+    case 2: return certify_unique<2>(W, c);
+    case 3: return certify_unique<3>(W, c);
+    default: return certify_unique<kCapK>(W, c);
+  }
+}
+
 ContactSetSolver::ContactSetSolver(int max_contacts, PgsOptions pgs)
     : max_contacts_(max_contacts),
       pgs_(pgs),
@@ -449,6 +587,42 @@ SetOutcome ContactSetSolver::solve(MatIn W, VecIn u0, std::span<const SetContact
   outcome_ = method == SetMethod::Enumeration ? enumerate(W, u0, contacts, band)
                                               : gauss_seidel(W, u0, contacts, band);
   return outcome_;
+}
+
+SetOutcome ContactSetSolver::solve_guess(MatIn W, VecIn u0, std::span<const SetContact> contacts,
+                                         SetBand band, std::span<const Phase> guess,
+                                         std::optional<bool> known_unique) {
+  const int K = static_cast<int>(contacts.size());
+  guess_taken_ = false;
+  bool eligible = K <= kMaxEnumContacts && K <= max_contacts_ && guess.size() == contacts.size() &&
+                  W.rows() == 2 * K && W.cols() == 2 * K && u0.size() == 2 * K &&
+                  band.tol_u > 0.0 && band.tol_r > 0.0 && all_finite(u0);
+  for (int i = 0; i < K && eligible; ++i) {
+    const SetContact& ci = contacts[static_cast<std::size_t>(i)];
+    const Phase g = guess[static_cast<std::size_t>(i)];
+    // the guess must be one of the contact's candidates (contact_set.hpp, ENUMERATION)
+    eligible = !ci.excluded && ci.mu >= 0.0 &&
+               (g == Phase::Free || (ci.mu == 0.0 ? g == Phase::SlipPos : true));
+  }
+  if (eligible && (known_unique ? *known_unique : unique_by_monotonicity(W, contacts))) {
+    ModeEval ev;
+    if (eval_mode(W, u0, contacts, guess.data(), band, data_scale(W, u0, K), ev) &&
+        ev.level == Level::Strict) {
+      K_ = K;
+      method_ = SetMethod::Enumeration;
+      all_free(u0);
+      for (int i = 0; i < K; ++i) mode_[i] = guess[static_cast<std::size_t>(i)];
+      for (int k = 0; k < 2 * K; ++k) {
+        r_(k) = ev.r[k];
+        u_(k) = ev.u[k];
+      }
+      n_candidates_ = n_strict_ = n_consistent_ = 1;
+      guess_taken_ = true;
+      outcome_ = SetOutcome::Unique;
+      return outcome_;
+    }
+  }
+  return solve(W, u0, contacts, band);
 }
 
 SetOutcome ContactSetSolver::enumerate(MatIn W, VecIn u0, std::span<const SetContact> contacts,

@@ -1,8 +1,8 @@
 // The K-contact solver (rubdyn/contact/contact_set.hpp) allocates nothing in solve(): its
 // workspaces are sized when it is built. Checked by counting every heap allocation of the
 // process (malloc, calloc, realloc; operator new and Eigen go through them) around solves of
-// every kind: enumeration for K = 1..4 with each outcome, Gauss-Seidel for K = 8. Part of the
-// allocation-test program (tests/CMakeLists.txt; the counter: alloc_counter.hpp).
+// every kind: enumeration for K = 1..4 with each outcome, Gauss-Seidel for K = 8, the first-guess
+// path. Part of the allocation-test program (tests/CMakeLists.txt; the counter: alloc_counter.hpp).
 
 #include <catch2/catch.hpp>
 #include <cstddef>
@@ -38,6 +38,7 @@ TEST_CASE("No allocation in the K-contact solver: enumeration and Gauss-Seidel",
   Vec up(4);
   up << -1, 0, -1, 0;
   std::vector<SetContact> cp = {{0.5, 0, {}}, {1.0, 1, {}}};
+  const std::vector<Phase> stick(2, Phase::Stick), open(2, Phase::Free);  // guesses
   long outcomes = 0;
   const long before = rubdyn::testing::allocations();
   for (int K = 1; K <= K_max; ++K) {
@@ -54,6 +55,13 @@ TEST_CASE("No allocation in the K-contact solver: enumeration and Gauss-Seidel",
   outcomes += static_cast<int>(
       solver.solve(Ws[3].topLeftCorner(4, 4), us[3].head(4), std::span(cs[3]).first(2),
                    contact_set_band(Ws[3].topLeftCorner(4, 4), us[3].head(4))));
+  // the first-guess path (Moreau-Jean's): the certificate, a guess taken and one refused
+  {
+    const SetBand band = contact_set_band(Ws[1], us[1]);
+    outcomes += unique_by_monotonicity(Ws[1], cs[1]) ? 1 : 0;
+    outcomes += static_cast<int>(solver.solve_guess(Ws[1], us[1], cs[1], band, stick));
+    outcomes += static_cast<int>(solver.solve_guess(Ws[1], us[1], cs[1], band, open));
+  }
   const long n = rubdyn::testing::allocations() - before;
   INFO("allocations " << n << " (outcomes " << outcomes << ")");
   CHECK(n == 0);

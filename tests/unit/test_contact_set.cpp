@@ -806,3 +806,114 @@ TEST_CASE("Contact set: report of the random families, the cost and Gauss-Seidel
               b.solved, b.sweeps_mean, b.sweeps_max);
   SUCCEED();
 }
+
+TEST_CASE("Contact set: the uniqueness certificate never meets two solutions", "[contact][unit]") {
+  // unique_by_monotonicity(W) claims at most one solution for every u0. Tested against the
+  // independent brute force on the random families (SPD, and the non-symmetric Painleve-prone
+  // W without fixed sliding), with mu up to 2 so that the certificate both holds and fails: a
+  // certified problem must never have two robust solutions (bf.robust > 1), and the
+  // enumeration must never call it NonUnique. Not vacuous: the certificate holds on a good share
+  // and fails on every problem with two solutions (counted below).
+  Rng rng(29);
+  ContactSetSolver solver(4);
+  int certified = 0, uncertified = 0, nonunique_seen = 0;
+  for (int family = 0; family < 2; ++family)
+    for (int K = 2; K <= 4; ++K)
+      for (int k = 0; k < 2500; ++k) {
+        Mat W;
+        Vec u0;
+        if (family == 0)
+          random_spd(rng, K, W, u0);
+        else
+          random_painleve(rng, K, W, u0);
+        const double mu_max = k % 2 == 0 ? 0.5 : 2.0;
+        const std::vector<SetContact> c = random_contacts(rng, K, mu_max, false);
+        const bool cert = unique_by_monotonicity(W, c);
+        const SetOutcome o = solver.solve(W, u0, c, contact_set_band(W, u0));
+        const BruteForce bf = brute_force(W, u0, c);
+        INFO("family " << family << " K " << K << " problem " << k << " outcome " << to_string(o)
+                       << " robust " << bf.robust << "\nW =\n"
+                       << W << "\nu0 = " << u0.transpose());
+        nonunique_seen += o == SetOutcome::NonUnique;
+        if (cert) {
+          ++certified;
+          CHECK(o != SetOutcome::NonUnique);
+          CHECK(bf.robust <= 1);
+        } else {
+          ++uncertified;
+        }
+      }
+  INFO("certified " << certified << ", uncertified " << uncertified << ", non-unique "
+                    << nonunique_seen);
+  CHECK(certified > 3000);
+  CHECK(uncertified > 1000);
+  CHECK(nonunique_seen > 50);
+  // without friction an SPD W is certified (the bracket is sym(W) itself)
+  for (int k = 0; k < 200; ++k) {
+    Mat W;
+    Vec u0;
+    random_spd(rng, 3, W, u0);
+    CHECK(unique_by_monotonicity(W, std::vector<SetContact>(3)));
+  }
+  // a fixed sliding direction is another law: never certified
+  Mat W;
+  Vec u0;
+  random_spd(rng, 2, W, u0);
+  CHECK_FALSE(unique_by_monotonicity(W, std::vector<SetContact>{{0.1, 1, {}}, {0.1, 0, {}}}));
+}
+
+TEST_CASE("Contact set: a first guess taken is the enumeration's answer to the bit",
+          "[contact][unit]") {
+  // solve_guess on random SPD problems (mu <= 0.5) with three guesses: the enumeration's own
+  // modes (taken when certified and Unique), every contact free (taken only when r = 0 is the
+  // strict solution) and the modes of another problem (mostly refused). Whatever it does, its
+  // outcome, modes, r and u must be the enumeration's, bit for bit; when it refuses, its counts
+  // are the enumeration's too.
+  Rng rng(31);
+  ContactSetSolver full(4), guessed(4);
+  int taken = 0, refused = 0;
+  std::vector<Phase> previous(4, Phase::Stick);
+  for (int k = 0; k < 6000; ++k) {
+    const int K = 2 + k % 3;
+    Mat W;
+    Vec u0;
+    random_spd(rng, K, W, u0);
+    const std::vector<SetContact> c = random_contacts(rng, K, 0.5, false);
+    const SetBand band = contact_set_band(W, u0);
+    const SetOutcome o = full.solve(W, u0, c, band);
+    const std::vector<Phase> own = modes_of(full);
+    std::vector<Phase> guess = own;
+    if (k % 3 == 1) guess.assign(K, Phase::Free);
+    if (k % 3 == 2) guess.assign(previous.begin(), previous.begin() + K);
+    for (int i = 0; i < K; ++i)  // a frictionless contact's candidates are free and SlipPos
+      if (c[i].mu == 0.0 && guess[i] != Phase::Free) guess[i] = Phase::SlipPos;
+    const SetOutcome g = guessed.solve_guess(W, u0, c, band, guess);
+    INFO("K " << K << " problem " << k << " outcome " << to_string(o) << " guess taken "
+              << guessed.guess_taken());
+    REQUIRE(g == o);
+    CHECK(modes_of(guessed) == own);
+    for (int e = 0; e < 2 * K; ++e) {
+      CHECK(guessed.r()(e) == full.r()(e));
+      CHECK(guessed.u()(e) == full.u()(e));
+    }
+    if (guessed.guess_taken()) {
+      ++taken;
+      CHECK(o == SetOutcome::Unique);
+      CHECK(guess == own);
+      CHECK(unique_by_monotonicity(W, c));
+    } else {
+      ++refused;
+      CHECK(guessed.n_candidates() == full.n_candidates());
+      CHECK(guessed.n_strict() == full.n_strict());
+    }
+    // the caller's certificate, when given, is used as given
+    const SetOutcome g2 = guessed.solve_guess(W, u0, c, band, own, false);
+    CHECK(g2 == o);
+    CHECK_FALSE(guessed.guess_taken());
+    previous = own;
+    previous.resize(4, Phase::Stick);
+  }
+  INFO("taken " << taken << ", refused " << refused);
+  CHECK(taken > 1000);
+  CHECK(refused > 1000);
+}

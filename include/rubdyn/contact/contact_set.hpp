@@ -119,6 +119,20 @@ struct SetBand {
 /// make_local_problem's band (coulomb_signorini.hpp).
 SetBand contact_set_band(MatIn W, VecIn u0, double rel_band = 1e-13);
 
+/// A sufficient condition for the problem to have at most one solution whatever u0 (the
+/// Coulomb-Signorini law without a fixed sliding direction: impulse and Moreau-Jean levels;
+/// docs/contact-set.md, "Uniqueness certificate"). With the De Saxce velocity
+/// u^ = (u_N + mu |u_T|, u_T) the law of each contact reads -u^ in N_K(r) (K the friction cone),
+/// a monotone relation; two solutions r1, r2 (dr = r1 - r2) then give
+///     dr^T W dr <= sum_k mu_k |w_Tk . dr| |dr_Nk|     (w_Tk: row 2k+1 of W),
+/// and by Young's inequality (any a_k > 0)
+///     dr^T [sym(W) - sum_k (mu_k / 2) (a_k w_Tk w_Tk^T + e_Nk e_Nk^T / a_k)] dr <= 0,
+/// so dr = 0 when the bracket is positive definite. True when a Cholesky factorisation of the
+/// bracket less 1e-10 (2K) max|bracket| I succeeds for one of a_k = t / |w_Tk|, t in {1, 1/2, 2,
+/// 1/4, 4} (the shift covers the factorisation's round-off). False for a contact with a fixed
+/// sliding direction, for K > kMaxEnumContacts and for non-finite W. Allocates nothing.
+bool unique_by_monotonicity(MatIn W, std::span<const SetContact> contacts);
+
 /// Impulse level: u0 = ((1 + e_n) v_N-, (1 + e_t) v_t-) per contact, from v_minus = (v_N-, v_t-)
 /// per contact (2K) and each contact's law. u0 must have 2K entries.
 void impulse_free_velocity(VecIn v_minus, std::span<const ContactLaw> laws, VecOut u0);
@@ -132,6 +146,21 @@ class ContactSetSolver {
   /// Solves the problem (W: 2K x 2K, u0: 2K, contacts: K <= max_contacts entries).
   SetOutcome solve(MatIn W, VecIn u0, std::span<const SetContact> contacts, SetBand band,
                    SetMethod method = SetMethod::Auto);
+
+  /// The enumeration with a first guess (a time-stepper's last modes): when no contact has an
+  /// `excluded` mode, unique_by_monotonicity(W) holds and the combination `guess` (one mode per
+  /// contact) is strictly consistent, that combination is the answer, Unique, and nothing else is
+  /// solved: it is the enumeration's own answer, the same r and u to the bit (the same solve of
+  /// the same system; a second strict combination would be a second solution, which the
+  /// certificate excludes). The counts are then those of the one combination (1, 1, 1) and the
+  /// spreads 0. Otherwise solve(W, u0, contacts, band). guess_taken() says which.
+  /// `known_unique`, when given, is the caller's unique_by_monotonicity(W, contacts) for this
+  /// very W and these contacts (a time-stepper that keeps W over its Newton iterates computes it
+  /// once per W).
+  SetOutcome solve_guess(MatIn W, VecIn u0, std::span<const SetContact> contacts, SetBand band,
+                         std::span<const Phase> guess,
+                         std::optional<bool> known_unique = std::nullopt);
+  bool guess_taken() const { return guess_taken_; }
 
   int size() const { return K_; }
   SetOutcome outcome() const { return outcome_; }
@@ -182,6 +211,7 @@ class ContactSetSolver {
   double r_spread_ = 0.0, u_spread_ = 0.0;
   int sweeps_ = 0;
   double last_change_ = 0.0;
+  bool guess_taken_ = false;
   std::unique_ptr<EnumWork> work_;
   Vec dr_;       // Gauss-Seidel: each contact's change of r in the last sweep
   Mat local_W_;  // Gauss-Seidel: one contact's 2x2 block and free u
