@@ -127,9 +127,10 @@ SetBand contact_set_band(MatIn W, VecIn u0, double rel_band = 1e-13);
 ///     dr^T W dr <= sum_k mu_k |w_Tk . dr| |dr_Nk|     (w_Tk: row 2k+1 of W),
 /// and by Young's inequality (any a_k > 0)
 ///     dr^T [sym(W) - sum_k (mu_k / 2) (a_k w_Tk w_Tk^T + e_Nk e_Nk^T / a_k)] dr <= 0,
-/// so dr = 0 when the bracket is positive definite. True when a Cholesky factorisation of the
-/// bracket less 1e-10 (2K) max|bracket| I succeeds for one of a_k = t / |w_Tk|, t in {1, 1/2, 2,
-/// 1/4, 4} (the shift covers the factorisation's round-off). False for a contact with a fixed
+/// so dr = 0 when the bracket is positive definite. True when the bracket less
+/// 1e-10 (2K) max|bracket| I is positive definite (by Gershgorin's discs, else by an LDL^T
+/// factorisation; the shift covers their round-off) for one of a_k = t / |w_Tk|, t in {1, 1/2,
+/// 2, 1/4, 4}. False for a contact with a fixed
 /// sliding direction, for K > kMaxEnumContacts and for non-finite W. Allocates nothing.
 bool unique_by_monotonicity(MatIn W, std::span<const SetContact> contacts);
 
