@@ -170,12 +170,25 @@ BENCHMARK_CAPTURE(from_case, jeffcott_mj_50ms_h1e6, "jeffcott.toml",
     ->Unit(benchmark::kMillisecond);
 
 // Two rub planes (cases/two-plane.toml: 9 dofs, two contacts, both hit from 6 ms and sliding
-// after), Moreau-Jean over 30 ms at h = 1e-6, against the one-plane mj_30ms_h1e6 above (7 dofs,
-// the fixed-size path): the cost of a second plane per step
+// after), the fixed-step schemes over 30 ms at h = 1e-6, against the one-plane reference case
+// run the same way (from its case file, through simulate: reference_*; 7 dofs, the fixed-size
+// path): the cost of a second plane per step
+BENCHMARK_CAPTURE(from_case, reference_mj_30ms_h1e6, "reference.toml",
+                  {"run.t_end=0.03", "solver.kind=\"mj\"", "solver.h=1e-6"})
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(from_case, two_plane_mj_30ms_h1e6, "two-plane.toml", {"run.t_end=0.03"})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(from_case, reference_mj_proj_30ms_h1e6, "reference.toml",
+                  {"run.t_end=0.03", "solver.kind=\"mj-proj\"", "solver.h=1e-6"})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(from_case, two_plane_mj_proj_30ms_h1e6, "two-plane.toml",
                   {"run.t_end=0.03", "solver.kind=\"mj-proj\""})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(from_case, reference_carp_onevc_30ms_h1e6, "reference.toml",
+                  {"run.t_end=0.03", "solver.kind=\"carp-onevc\"", "solver.h=1e-6"})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(from_case, two_plane_carp_onevc_30ms_h1e6, "two-plane.toml",
+                  {"run.t_end=0.03", "solver.kind=\"carp-onevc\""})
     ->Unit(benchmark::kMillisecond);
 // the event-driven solver on the same case (its contact phases as the DAE with projection, the
 // only formulation with several contacts): per-step costs against the one-plane

@@ -449,7 +449,12 @@ std::unique_ptr<Stepper> make_carpenter(const LagrangianModel& m, const FixedSte
     throw std::invalid_argument(fmt::format("{}: at most {} contacts; model '{}' has {}",
                                             to_string(opt.scheme), detail::kMaxSmall, m.name(),
                                             m.contact_count()));
-  if (m.contact_count() > 1) return std::make_unique<Carpenter<Eigen::Dynamic, true>>(m, opt);
+  if (m.contact_count() > 1) {
+    // the rigid rotor with two planes on sprung rings (9 dofs): fixed-size vectors, as the
+    // one-plane rotor's 7
+    if (m.num_dofs() == 9) return std::make_unique<Carpenter<9, true>>(m, opt);
+    return std::make_unique<Carpenter<Eigen::Dynamic, true>>(m, opt);
+  }
   if (m.num_dofs() == 7) return std::make_unique<Carpenter<7>>(m, opt);  // the rigid rotor
   return std::make_unique<Carpenter<Eigen::Dynamic>>(m, opt);
 }

@@ -41,7 +41,9 @@ struct MultiWork<N, true> {
         u0(Vec::Zero(2 * K)),
         rN(static_cast<std::size_t>(K), 0.0),
         rT(static_cast<std::size_t>(K), 0.0),
-        mode(static_cast<std::size_t>(K), Phase::Free) {
+        mode(static_cast<std::size_t>(K), Phase::Free),
+        last_mode(static_cast<std::size_t>(K), Phase::Free),
+        guess(static_cast<std::size_t>(K), Phase::Free) {
     act.reserve(static_cast<std::size_t>(K));
     pen.reserve(static_cast<std::size_t>(K));
   }
@@ -55,6 +57,10 @@ struct MultiWork<N, true> {
   Vec u0;
   std::vector<double> rN, rT;  ///< the active contacts' impulses of the last solve
   std::vector<Phase> mode;     ///< and their modes
+  /// each contact's mode in the last joint solve (Free when it was not active): the first guess
+  /// of the next (ContactSetSolver::solve_guess), in act order in `guess`
+  std::vector<Phase> last_mode, guess;
+  bool unique = false;  ///< unique_by_monotonicity of the current Wd (set with it)
 };
 
 /// N: the model's dofs, fixed (a fast path) or Eigen::Dynamic (simplified_newton.hpp).

@@ -90,9 +90,13 @@ StepOutcome MoreauJean<N, Multi>::step_multi(double t, StepReport& r, std::strin
         w.rT[0] = sol.r_T;
         w.mode[0] = sol.phase;
       } else {
-        o = w.set.solve(W, u0,
-                        std::span<const SetContact>(w.sc.data(), static_cast<std::size_t>(na)),
-                        contact_set_band(W, u0));
+        // the last modes first: taken when the problem is certified to have one solution and
+        // they still solve it strictly (contact_set.hpp, solve_guess: the enumeration's answer)
+        const auto una = static_cast<std::size_t>(na);
+        for (std::size_t a = 0; a < una; ++a)
+          w.guess[a] = w.last_mode[static_cast<std::size_t>(w.act[a])];
+        o = w.set.solve_guess(W, u0, std::span<const SetContact>(w.sc.data(), una),
+                              contact_set_band(W, u0), std::span<const Phase>(w.guess.data(), una));
         if (has_solution(o))
           for (int a = 0; a < na; ++a) {
             const auto ia = static_cast<std::size_t>(a);
@@ -101,6 +105,11 @@ StepOutcome MoreauJean<N, Multi>::step_multi(double t, StepReport& r, std::strin
             w.mode[ia] = w.set.mode(a);
           }
       }
+      std::fill(w.last_mode.begin(), w.last_mode.end(), Phase::Free);
+      if (has_solution(o))
+        for (int a = 0; a < na; ++a)
+          w.last_mode[static_cast<std::size_t>(w.act[static_cast<std::size_t>(a)])] =
+              w.mode[static_cast<std::size_t>(a)];
       if (!has_solution(o)) {
         std::string who;
         for (int a = 0; a < na; ++a)
@@ -200,9 +209,16 @@ template <>
 StepOutcome MoreauJean<Eigen::Dynamic, true>::step(double t, StepReport& r, std::string& message) {
   return step_multi(t, r, message);
 }
+template <>
+StepOutcome MoreauJean<9, true>::step(double t, StepReport& r, std::string& message) {
+  return step_multi(t, r, message);
+}
 
 std::unique_ptr<Stepper> make_moreau_jean_multi(const LagrangianModel& m,
                                                 const FixedStepOptions& o) {
+  // the rigid rotor with two planes on sprung rings (9 dofs): fixed-size vectors, as the
+  // one-plane rotor's 7 (moreau_jean.cpp)
+  if (m.num_dofs() == 9) return std::make_unique<MoreauJean<9, true>>(m, o);
   return std::make_unique<MoreauJean<Eigen::Dynamic, true>>(m, o);
 }
 
