@@ -308,6 +308,12 @@ void CvodeSession::restart(double t0, const double* y0, int n_roots, const int* 
   I.started = true;
 }
 
+void CvodeSession::set_tolerances(const double* rtol, const double* atol) {
+  auto& I = *impl_;
+  std::copy(rtol, rtol + I.n, I.rtol.begin());
+  std::copy(atol, atol + I.n, I.atol.begin());
+}
+
 void CvodeSession::set_roots(int n_roots, const int* directions) {
   auto& I = *impl_;
   check(CVodeRootInit(I.mem, n_roots, n_roots > 0 ? &Impl::roots : nullptr), "CVodeRootInit");

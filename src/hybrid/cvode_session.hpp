@@ -56,6 +56,10 @@ class CvodeSession {
                double h_init, double t_stop);
   /// Changes the witnesses without restarting (same state, same history).
   void set_roots(int n_roots, const int* directions);
+  /// Replaces the per-component tolerances (n entries each; copied, nothing allocated): a
+  /// session reused for states whose components mean different things (the K-contact charts),
+  /// before its restart.
+  void set_tolerances(const double* rtol, const double* atol);
 
   enum class Status { Reached, Step, Root, Failure };
   /// Advances towards tout (CV_NORMAL: steps are never shortened to hit tout; y is interpolated).

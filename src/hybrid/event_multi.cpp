@@ -235,46 +235,60 @@ struct Projector {
   }
 };
 
-/// One CVODE session in full coordinates (q, v, works): free flight (Adams or BDF, no
-/// contact forces) or the contact DAE (BDF with projection, the closed contacts of the shared
-/// modes). Every buffer is sized when built: rhs, roots and projection allocate nothing.
+/// One CVODE session: free flight in full coordinates (q, v, works; Adams or BDF, no contact
+/// forces), the contact DAE in full coordinates (BDF with projection, the closed contacts of
+/// the shared modes), or, with a RingChart, a contact phase in its reduced coordinates
+/// (p, p', works) of size `dim` (ring_chart.hpp: every closed contact on a ring of its own;
+/// Adams or BDF, no projection: the constraints hold by construction). A reduced session serves
+/// every mode tuple of its dimension: its error weights are set at each restart. Every buffer
+/// is sized when built: rhs, roots and projection allocate nothing.
 class MultiSystem {
  public:
-  MultiSystem(const LagrangianModel& m, const Shared& sh, const SessionSettings& s, bool contact)
+  MultiSystem(const LagrangianModel& m, const Shared& sh, const SessionSettings& s, bool contact,
+              const RingChart* chart = nullptr, int dim = 0)
       : m_(m),
         n_(m.num_dofs()),
         K_(sh.K),
         sh_(sh),
         contact_(contact),
         rheonomic_(m.rheonomic()),
+        chart_(contact ? chart : nullptr),
+        dim_(chart_ ? dim : n_),
+        settings_(s),
         op_(n_, K_),
         ms_(n_, K_),
         pr_(n_, K_),
         q_(Vec::Zero(n_)),
         v_(Vec::Zero(n_)),
+        p_(Vec::Zero(dim_)),
+        pd_(Vec::Zero(dim_)),
         set_(static_cast<std::size_t>(K_), 0),
         tang_(static_cast<std::size_t>(K_), 0),
-        forces_(static_cast<std::size_t>(K_)) {
-    const int N = 2 * n_ + kNw;
+        forces_(static_cast<std::size_t>(K_)),
+        lengths_(static_cast<std::size_t>(dim_), 0.0) {
+    const int N = 2 * dim_ + kNw;
     rtol_.assign(static_cast<std::size_t>(N), s.rtol);
     atol_.assign(static_cast<std::size_t>(N), 1e-9);
-    for (int i = 0; i < n_; ++i) {
+    for (int i = 0; i < dim_; ++i) {
       atol_[static_cast<std::size_t>(i)] = s.atol_q;
-      atol_[static_cast<std::size_t>(n_ + i)] = s.atol_v;
+      atol_[static_cast<std::size_t>(dim_ + i)] = s.atol_v;
     }
     ys_.assign(static_cast<std::size_t>(N), 0.0);
     scratch_.assign(static_cast<std::size_t>(N), 0.0);
     CvodeConfig c;
     c.n = N;
-    c.method = contact || !s.adams ? CvodeMethod::BDF : CvodeMethod::Adams;
-    c.fixed_point = !contact && s.adams && s.fixed_point;
+    const bool adams = s.adams && (!contact || chart_ != nullptr);
+    c.method = adams ? CvodeMethod::Adams : CvodeMethod::BDF;
+    c.fixed_point = adams && s.fixed_point;
     c.rtol = rtol_.data();
     c.atol = atol_.data();
     c.max_steps = s.max_steps;
     CvodeCallbacks cb;
-    cb.rhs = contact ? &MultiSystem::rhs_contact : &MultiSystem::rhs_free;
+    cb.rhs = chart_    ? &MultiSystem::rhs_reduced
+             : contact ? &MultiSystem::rhs_contact
+                       : &MultiSystem::rhs_free;
     cb.roots = &MultiSystem::roots;
-    if (contact) cb.proj = &MultiSystem::proj;
+    if (contact && !chart_) cb.proj = &MultiSystem::proj;
     cb.user = this;
     session_ = std::make_unique<CvodeSession>(c, cb);
   }
@@ -283,39 +297,59 @@ class MultiSystem {
   const CvodeSession& session() const { return *session_; }
   double step_start() const { return session_->current_time() - session_->last_step(); }
 
-  /// Projects (q, v) onto the shared modes' constraints (contact sessions) and restarts there.
+  /// Projects (q, v) onto the shared modes' constraints (contact sessions) and restarts there;
+  /// a reduced session restarts from the chart of the projected state, and (q, v) become its
+  /// embedding (equal to the projected state to round-off).
   void restart(double t, Vec& q, Vec& v, const Works& w, double t_stop) {
     if (contact_) place(t, q, v);
-    VMap(ys_.data(), n_) = q;
-    VMap(ys_.data() + n_, n_) = v;
-    std::copy(w.begin(), w.end(), ys_.begin() + 2 * n_);
-    session_->restart(t, ys_.data(), static_cast<int>(sh_.list.size()), sh_.dirs.data(), contact_,
-                      0.0, t_stop);
+    if (chart_) {
+      chart_->chart(sh_.modes, q, v, anchor_, p_, pd_);
+      chart_->embed(sh_.modes, anchor_, p_, pd_, q, v);
+      VMap(ys_.data(), dim_) = p_;
+      VMap(ys_.data() + dim_, dim_) = pd_;
+      // error weights of this mode tuple's coordinates: a copied coordinate rtol |p| + atol_q,
+      // an angle by the displacement it causes, (rtol g0 + atol_q) / L (phase_system.cpp's
+      // rule); rates rtol |p'| + atol_v; works rtol |W| + 1e-9 J
+      chart_->lengths(sh_.modes, lengths_);
+      for (int i = 0; i < dim_; ++i) {
+        const double L = lengths_[static_cast<std::size_t>(i)];
+        rtol_[static_cast<std::size_t>(i)] = L > 0.0 ? 0.0 : settings_.rtol;
+        atol_[static_cast<std::size_t>(i)] =
+            L > 0.0 ? (settings_.rtol * settings_.g0 + settings_.atol_q) / L : settings_.atol_q;
+      }
+      session_->set_tolerances(rtol_.data(), atol_.data());
+    } else {
+      VMap(ys_.data(), n_) = q;
+      VMap(ys_.data() + n_, n_) = v;
+    }
+    std::copy(w.begin(), w.end(), ys_.begin() + 2 * dim_);
+    session_->restart(t, ys_.data(), static_cast<int>(sh_.list.size()), sh_.dirs.data(),
+                      contact_ && !chart_, 0.0, t_stop);
   }
   Status advance(double tout, double& t, Vec& q, Vec& v, bool one_step) {
     const Status st = session_->advance(tout, t, ys_.data(), one_step);
-    q = CMap(ys_.data(), n_);
-    v = CMap(ys_.data() + n_, n_);
+    to_full(ys_.data(), q, v);
     return st;
   }
-  /// The state at t inside the last step (projected onto the constraints in a contact phase).
+  /// The state at t inside the last step (projected onto the constraints in a contact phase;
+  /// on them by construction in a reduced one).
   void interpolate(double t, Vec& q, Vec& v) const {
     session_->dky(t, 0, scratch_.data());
-    q = CMap(scratch_.data(), n_);
-    v = CMap(scratch_.data() + n_, n_);
-    if (contact_) place(t, q, v);
+    to_full(scratch_.data(), q, v);
+    if (contact_ && !chart_) place(t, q, v);
   }
   Works works() const {
     Works w{};
-    std::copy_n(ys_.begin() + 2 * n_, kNw, w.begin());
+    std::copy_n(ys_.begin() + 2 * dim_, kNw, w.begin());
     return w;
   }
   Works works_at(double t) const {
     session_->dky(t, 0, scratch_.data());
     Works w{};
-    std::copy_n(scratch_.begin() + 2 * n_, kNw, w.begin());
+    std::copy_n(scratch_.begin() + 2 * dim_, kNw, w.begin());
     return w;
   }
+  bool reduced() const { return chart_ != nullptr; }
   /// Evaluates the phase at a state of it (projected first in a contact phase): forces in
   /// ms().r, accelerations in ms().a, kinematics in ops(). False: singular closed set.
   bool evaluate(double t, Vec& q, Vec& v) const {
@@ -356,6 +390,15 @@ class MultiSystem {
   }
 
  private:
+  /// The full state of a session state y (the embedding of the chart in a reduced session).
+  void to_full(const double* y, Vec& q, Vec& v) const {
+    if (chart_) {
+      chart_->embed(sh_.modes, anchor_, CMap(y, dim_), CMap(y + dim_, dim_), q, v);
+    } else {
+      q = CMap(y, n_);
+      v = CMap(y + n_, n_);
+    }
+  }
   void place(double t, Vec& q, Vec& v) const {
     for (int k = 0; k < K_; ++k) {
       const Phase p = sh_.modes[static_cast<std::size_t>(k)];
@@ -399,6 +442,17 @@ class MultiSystem {
     self->powers(t, q, v, self->ms_.a, self->op_, yd + 2 * n);
     return all_finite(self->ms_.a) ? 0 : 1;
   }
+  static int rhs_reduced(double t, const double* y, double* yd, void* user) {
+    auto* self = static_cast<MultiSystem*>(user);
+    const int d = self->dim_;
+    self->to_full(y, self->q_, self->v_);
+    self->op_.compute(self->m_, t, self->q_, self->v_);
+    if (!self->ms_.solve(self->op_, self->sh_.modes, self->sh_.laws)) return 1;
+    VMap(yd, d) = CMap(y + d, d);
+    self->chart_->reduce(self->sh_.modes, self->q_, self->ms_.a, VMap(yd + d, d));
+    self->powers(t, self->q_, self->v_, self->ms_.a, self->op_, yd + 2 * d);
+    return all_finite(self->ms_.a) ? 0 : 1;
+  }
   static int proj(double t, const double* y, double* corr, void* user) {
     auto* self = static_cast<MultiSystem*>(user);
     const int n = self->n_;
@@ -413,9 +467,13 @@ class MultiSystem {
   static int roots(double t, const double* y, double* g, void* user) {
     const auto* self = static_cast<const MultiSystem*>(user);
     const Shared& sh = self->sh_;
-    self->q_ = CMap(y, self->n_);
-    self->v_ = CMap(y + self->n_, self->n_);
-    self->evaluate_witnesses(t, self->q_, self->v_);
+    self->to_full(y, self->q_, self->v_);
+    if (self->chart_) {  // on the constraints by construction: no projection
+      self->pr_.op.compute(self->m_, t, self->q_, self->v_);
+      self->ms_.solve(self->pr_.op, sh.modes, sh.laws);
+    } else {
+      self->evaluate_witnesses(t, self->q_, self->v_);
+    }
     for (std::size_t i = 0; i < sh.list.size(); ++i) {
       const WitnessRef& w = sh.list[i];
       const double x = self->witness_value(w, t, self->q_, self->v_);
@@ -437,12 +495,17 @@ class MultiSystem {
   const int n_, K_;
   const Shared& sh_;
   const bool contact_, rheonomic_;
+  const RingChart* chart_;  ///< reduced session: the model's chart; else null
+  const int dim_;           ///< coordinates of the session state (n_ unless reduced)
+  SessionSettings settings_;
+  RingAnchor anchor_;
   mutable MultiOps op_;
   mutable ModeSolve ms_;
   mutable Projector pr_;
-  mutable Vec q_, v_;
+  mutable Vec q_, v_, p_, pd_;
   mutable std::vector<char> set_, tang_;
   mutable std::vector<ContactForce> forces_;
+  std::vector<double> lengths_;
   std::vector<double> rtol_, atol_, ys_;
   mutable std::vector<double> scratch_;
   std::unique_ptr<CvodeSession> session_;
@@ -508,6 +571,29 @@ class MultiIntegrator {
     s.max_steps = std::min(opt_.max_steps_per_call, kCheckSteps);
     free_ = std::make_unique<MultiSystem>(m_, sh_, s, false);
     contact_ = std::make_unique<MultiSystem>(m_, sh_, s, true);
+    // minimal coordinates (ring_chart.hpp): one session per dimension n - r, r = 1 .. 2K
+    // coordinates removed, built here so that no switch allocates
+    chart_ = opt_.contact_phases == ContactFormulation::Reduced ? m_.ring_chart() : nullptr;
+    if (chart_ != nullptr && chart_->contact_count() == K_) {
+      SessionSettings sr = s;
+      sr.adams = opt_.contact_adams;
+      reduced_.resize(static_cast<std::size_t>(2 * K_ + 1));
+      for (int r = 1; r <= 2 * K_ && r < n_; ++r)
+        reduced_[static_cast<std::size_t>(r)] =
+            std::make_unique<MultiSystem>(m_, sh_, sr, true, chart_, n_ - r);
+    } else {
+      chart_ = nullptr;
+    }
+  }
+  /// The session of the shared modes: free flight, a reduced contact phase where the chart
+  /// composes, the projection formulation otherwise.
+  MultiSystem* session_for_modes() {
+    if (!sh_.any_closed()) return free_.get();
+    if (chart_ != nullptr && chart_->applies(sh_.modes)) {
+      const auto r = static_cast<std::size_t>(n_ - chart_->dim(sh_.modes));
+      if (r < reduced_.size() && reduced_[r]) return reduced_[r].get();
+    }
+    return contact_.get();
   }
 
   void build_witnesses() {
@@ -542,7 +628,7 @@ class MultiIntegrator {
   void start_phase(double t, const Vec& q, const Vec& v) {
     phase_start_ = t;
     build_witnesses();
-    cur_ = sh_.any_closed() ? contact_.get() : free_.get();
+    cur_ = session_for_modes();
     if (&q != &q_restart_) q_restart_ = q;
     if (&v != &v_restart_) v_restart_ = v;
     if (sh_.any_closed()) {
@@ -1091,6 +1177,8 @@ class MultiIntegrator {
   EventGuard guard_;
   Shared sh_;
   std::unique_ptr<MultiSystem> free_, contact_;
+  std::vector<std::unique_ptr<MultiSystem>> reduced_;  ///< by coordinates removed (chart_)
+  const RingChart* chart_ = nullptr;
   MultiSystem* cur_ = nullptr;
   Phase books_ = Phase::Free;
   bool omega_pending_ = false;
@@ -1112,12 +1200,21 @@ class MultiIntegrator {
 
 RunSummary MultiIntegrator::run(const MechanicalState& init, double t_end) {
   t_end_ = t_end;
+  // contact phases: minimal coordinates where the model's ring chart composes (each closed
+  // contact on a sprung ring of its own), the projection formulation for the other phases
+  const RingChart* rc = m_.ring_chart();
+  const bool reduced = opt_.contact_phases == ContactFormulation::Reduced && rc != nullptr &&
+                       rc->contact_count() == K_;
+  const std::string phases =
+      reduced ? fmt::format("reduced+{} (bdf+projection where a ring is shared or fixed)",
+                            opt_.contact_adams ? "adams" : "bdf")
+              : std::string("bdf+projection");
   env_.emplace(opt_, sink_, init.t, t_end, m_.mechanical_energy(init.t, init.q, init.v), law(0).mu,
                "event",
                fmt::format("{{\"rtol\": {:.3g}, \"atol\": {:.3g}, \"free_flight\": \"{}\", "
-                           "\"contact_phases\": \"bdf+projection\", \"contacts\": {}, "
+                           "\"contact_phases\": \"{}\", \"contacts\": {}, "
                            "\"adams_iteration\": \"{}\", \"output_dt\": {:.6g}}}",
-                           opt_.rtol, opt_.atol, opt_.adams ? "adams" : "bdf", K_,
+                           opt_.rtol, opt_.atol, opt_.adams ? "adams" : "bdf", phases, K_,
                            opt_.fixed_point ? "fixed-point" : "newton", opt_.output_dt));
   RunSummary& sum = env_->summary();
   Plausibility plaus;
@@ -1243,15 +1340,18 @@ RunSummary MultiIntegrator::run(const MechanicalState& init, double t_end) {
   }
   end_phase(t);
   if (cur_) work_ = cur_->works();
-  for (const auto* s : {free_.get(), contact_.get()}) {
-    if (!s) continue;
+  auto add_stats = [&sum](const MultiSystem* s) {
+    if (!s) return;
     const auto st = s->session().stats();
     sum.steps += st.steps;
     sum.rhs_evals += st.rhs_evals;
     sum.jac_evals += st.jac_evals;
     sum.root_evals += st.root_evals;
     sum.newton_iters += st.newton_iters;
-  }
+  };
+  add_stats(free_.get());
+  add_stats(contact_.get());
+  for (const auto& s : reduced_) add_stats(s.get());
   return env_->finish(t, m_.mechanical_energy(t, q, v),
                       {work_[0], work_[1], work_[2], work_impacts_});
 }

@@ -98,6 +98,20 @@ MatrixModel::MatrixModel(const MatrixParams& p)
   xs_ = nodes_[0].xs;
   ys_ = nodes_[0].ys;
   sprung_ = nodes_[0].sprung();
+  if (K_ > 1) {  // the K-contact chart: each node's (x, y) and its ring (x_s_k, y_s_k adjacent)
+    std::vector<RingContact> rc;
+    for (const Node& nd : nodes_) {
+      RingContact c;
+      c.ix = {nd.ix, -1};
+      c.iy = {nd.iy, -1};
+      c.w = {1.0, 0.0};
+      c.ring = nd.sprung() ? nd.xs : -1;
+      c.gap = nd.gap;
+      c.radius = nd.radius;
+      rc.push_back(c);
+    }
+    ring_chart_.emplace(N_, th_, std::move(rc));
+  }
   RUBDYN_DEMAND(n_ >= 2 && r.M.cols() == n_ && r.C.rows() == n_ && r.C.cols() == n_ &&
                 r.K.rows() == n_ && r.K.cols() == n_ && r.G.rows() == n_ && r.G.cols() == n_ &&
                 r.f0.size() == n_);

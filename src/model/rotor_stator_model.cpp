@@ -84,6 +84,26 @@ RotorStatorModel::RotorStatorModel(const RotorStatorParams& p)
   // the chart parametrises one plane at R on a sprung ring in (x_s, y_s) = dofs 5, 6: the
   // paper's model, or one [[plane]] that is exactly it
   chartable_ = planes_.size() == 1 && planes_[0].at_R && planes_[0].ring == XS;
+  if (planes_.size() > 1) {  // the K-contact chart: each plane's point (eq. 9-10) and ring
+    std::vector<RingContact> rc;
+    for (const Plane& pl : planes_) {
+      RingContact c;
+      if (pl.at_R) {
+        c.ix = {XR, -1};
+        c.iy = {YR, -1};
+        c.w = {1.0, 0.0};
+      } else {
+        c.ix = {XB, XR};
+        c.iy = {YB, YR};
+        c.w = {1.0 - pl.s, pl.s};
+      }
+      c.ring = pl.ring;
+      c.gap = pl.gap;
+      c.radius = pl.radius;
+      rc.push_back(c);
+    }
+    ring_chart_.emplace(n_, TH, std::move(rc));
+  }
   const double jl = r.Jd / (l_ * l_);
   M11_ = (1.0 - nu_) * (1.0 - nu_) * r.mass + jl;
   M12_ = nu_ * (1.0 - nu_) * r.mass - jl;

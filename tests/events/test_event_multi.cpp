@@ -4,7 +4,8 @@
 // identical halves), a rod dropped flat (both ends at the exact instant, the weight shared
 // equally, a joint Zeno truncation), a rod sliding flat (exact deceleration and stick time), a rod
 // dropped tilted (one end lands first: stick at one contact while the other is open, then both),
-// and the two-plane rotor (energy balance, invariants, self-convergence).
+// the two-plane rotor (energy balance, invariants, self-convergence), and its contact phases in
+// the K-contact chart (ring_chart.hpp) against the projection formulation, sliding and rolling.
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -233,9 +234,10 @@ TEST_CASE("Event-driven with K contacts: the two-plane rotor", "[events][multi]"
   CHECK(ra.max_drift_position < 1e-15);
   // Self-convergence on the output grid (the rows written at events lie at each run's own event
   // times and are left out). Measured against rtol 1e-13 (cases/two-plane.toml through the CLI,
-  // 30 ms): x_r differs by 9.0e-11, 8.0e-12, 1.5e-12, 2.2e-13 m at rtol 1e-8, 1e-9, 1e-10, 1e-11,
-  // about tenfold per decade. Here rtol 1e-10 against 1e-12: 1e-11 m is a margin of about 7
-  // over the 1.5e-12 m measured.
+  // 30 ms, atol = 1e-3 rtol, contact phases in the ring chart): x_r differs by 3.1e-11, 1.8e-12,
+  // 4.9e-13, 3.0e-14 m at rtol 1e-8, 1e-9, 1e-10, 1e-11 (the projection formulation: 9.0e-11,
+  // 8.0e-12, 1.5e-12, 2.2e-13). Here rtol 1e-10 against 1e-12, measured 1.8e-12 m: 1e-11 m is a
+  // margin of about 5.
   const double dt = 1e-4;
   auto on_grid = [&](double t) { return std::abs(t / dt - std::round(t / dt)) < 1e-9; };
   std::map<long, const Sample*> grid_b;
@@ -289,16 +291,86 @@ TEST_CASE("Event-driven with K contacts: two identical rings at one plane are th
     dF = std::max(dF, std::abs(x.contacts[0].F_N + x.contacts[1].F_N - y.contacts[0].F_N));
     Fmax = std::max(Fmax, y.contacts[0].F_N);
   }
-  // The one-ring run integrates its contact phases in minimal coordinates (Adams), the split
-  // one as the DAE with projection (BDF): they agree to the integrators' accuracy, measured
-  // 2.5e-12 m on the 2e-4 m orbit (the two-plane self-convergence above: 1.5e-12 m between rtol
-  // 1e-10 and 1e-13); 1e-10 m bounds it with a margin of 40. The forces are accelerations, less
-  // accurate than the positions: their sum differs by 2.0e-5 N of 121 N (1.7e-7), bounded by
-  // 1e-6 relative.
+  // Both runs integrate their contact phases in minimal coordinates, the one ring in its chart
+  // (contact_chart.hpp), the two halves, each a ring of its own, in the K-contact chart
+  // (ring_chart.hpp): they agree to the integrators' accuracy, measured 9.6e-13 m on the 2e-4 m
+  // orbit (2.5e-12 m with the halves as the DAE with projection; the two-plane self-convergence
+  // above: 1.8e-12 m between rtol 1e-10 and 1e-12); 1e-10 m bounds it with a margin of 100. The
+  // forces are accelerations, less accurate than the positions: their sum differs by 8.9e-6 N of
+  // 120 N (7e-8; 1.7e-7 with projection), bounded by 1e-6 relative.
   INFO("orbit difference " << dq << " m, force sum difference " << dF << " N of " << Fmax
                            << ", split difference " << dsplit << " N");
   CHECK(dq < 1e-10);
   CHECK(dF < 1e-6 * Fmax);
   // the minimum-norm split: equal halves to round-off of the decomposition
   CHECK(dsplit < 1e-12 * Fmax);
+}
+
+TEST_CASE("Event-driven with K contacts: contact phases in minimal coordinates (ring chart)",
+          "[events][multi]") {
+  // cases/two-plane.toml has a sprung ring per plane: its contact phases run in the chart of
+  // contact/ring_chart.hpp (the summary says "reduced"), where the constraints hold by
+  // construction. The projection formulation of the same run is an independent integration of
+  // the same equations: they agree to the integrators' accuracy.
+  const CaseSpec c = load_case(RUBDYN_SOURCE_DIR "/cases/two-plane.toml");
+  const auto m = build_model(c);
+  EventDrivenOptions proj = options(1e-12, 1e-4);
+  proj.contact_phases = ContactFormulation::Projection;
+  MemorySink a, b;
+  const RunSummary ra = run_event_driven(*m, initial_state(c), 0.03, options(1e-12, 1e-4), a);
+  const RunSummary rb = run_event_driven(*m, initial_state(c), 0.03, proj, b);
+  REQUIRE(ra.complete());
+  REQUIRE(rb.complete());
+  CHECK(ra.options.find("reduced+adams") != std::string::npos);
+  CHECK(rb.options.find("bdf+projection") != std::string::npos);
+  // on the constraint to round-off (|P - S| = g formed from coordinates of 1e-4 m: ulps of
+  // 1e-4 m are 1e-20 m); the projection stops at its own tolerance
+  INFO("drift reduced " << ra.max_drift_position << " m, projection " << rb.max_drift_position);
+  CHECK(ra.max_drift_position < 1e-18);
+  const double dt = 1e-4;
+  auto on_grid = [&](double t) { return std::abs(t / dt - std::round(t / dt)) < 1e-9; };
+  std::map<long, const Sample*> grid_b;
+  for (const Sample& x : b.samples)
+    if (on_grid(x.t)) grid_b[std::lround(x.t / dt)] = &x;
+  double dq = 0.0;
+  for (const Sample& x : a.samples) {
+    if (!on_grid(x.t)) continue;
+    const auto it = grid_b.find(std::lround(x.t / dt));
+    if (it != grid_b.end())
+      dq = std::max(dq, (x.q.head(4) - it->second->q.head(4)).cwiseAbs().maxCoeff());
+  }
+  // measured 6.6e-14 m on the output grid (the projection's own self-convergence at rtol 1e-12,
+  // the tighter of the two: a few 1e-14 m); 1e-12 m is a margin of 15
+  INFO("reduced vs projection at rtol 1e-12: " << dq << " m");
+  CHECK(dq < 1e-12);
+}
+
+TEST_CASE("Event-driven with K contacts: rolling at both planes in minimal coordinates",
+          "[events][multi]") {
+  // mu = 0.5 at both planes: the rotor whips, then rolls at both rings (stick at both: the
+  // chart ties each ring's angle to the spin). The energy balance closes to the integrator's
+  // tolerance in the reduced formulation; the projection formulation, which takes energy out at
+  // every projection, is far from it on the same run.
+  const CaseSpec c =
+      load_case(RUBDYN_SOURCE_DIR "/cases/two-plane.toml", {"plane.1.mu=0.5", "plane.2.mu=0.5"});
+  const auto m = build_model(c);
+  EventDrivenOptions proj = options(1e-10, 1e-4);
+  proj.contact_phases = ContactFormulation::Projection;
+  MemorySink a, b;
+  const RunSummary ra = run_event_driven(*m, initial_state(c), 0.03, options(1e-10, 1e-4), a);
+  const RunSummary rb = run_event_driven(*m, initial_state(c), 0.03, proj, b);
+  REQUIRE(ra.complete());
+  REQUIRE(rb.complete());
+  const double flows = std::abs(ra.work_damping) + std::abs(ra.work_friction) +
+                       std::abs(ra.work_torque) + std::abs(ra.work_impacts);
+  INFO("stick fraction " << ra.phase_time[static_cast<int>(Phase::Stick)] / 0.03
+                         << "; energy residual reduced " << ra.energy_residual << " J, projection "
+                         << rb.energy_residual << " J of flows " << flows << " J; drift "
+                         << ra.max_drift_position << " m");
+  // measured: stick 19 % of the 30 ms; residual 1.5e-5 J of 1.9e4 J of flows (8e-10: the works
+  // integrated at rtol 1e-10), the projection formulation 6.2e-2 J (3e-6); 1e-8 of the flows is
+  // a margin of 12 on the reduced one and 300 times below the projection's
+  CHECK(ra.phase_time[static_cast<int>(Phase::Stick)] > 0.003);
+  CHECK(std::abs(ra.energy_residual) < 1e-8 * flows);
+  CHECK(ra.max_drift_position < 1e-18);
 }

@@ -30,6 +30,7 @@
 #include "rubdyn/contact/contact_chart.hpp"
 #include "rubdyn/contact/contact_kinematics.hpp"
 #include "rubdyn/contact/contact_law.hpp"
+#include "rubdyn/contact/ring_chart.hpp"
 #include "rubdyn/core/types.hpp"
 #include "rubdyn/model/coordinates.hpp"
 
@@ -144,6 +145,9 @@ class LagrangianModel {
   /// Minimal coordinates of the contact phases, or nullptr when the model has none (the
   /// event-driven integrator then integrates contact phases as a DAE with projection).
   virtual const ContactChart* contact_chart() const { return nullptr; }
+  /// Minimal coordinates of contact phases with several closed contacts, each on a sprung ring
+  /// of its own (contact/ring_chart.hpp), or nullptr (the projection formulation then).
+  virtual const RingChart* ring_chart() const { return nullptr; }
 
   /// Kinetic energy 1/2 v^T M(q) v (of the whole system, a prescribed motion's included) at
   /// time t. The default forms M (allocates); models override it.

@@ -28,6 +28,7 @@
 // Minimal coordinates of the contact phases, as the Jeffcott rotor's with the other rotor
 // coordinates passing through: slip p = (q without the node's (x, y), phi in their place,
 // theta, x_s, y_s); stick p = (the same with theta - theta0 in phi's place and no theta).
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -116,6 +117,7 @@ class MatrixModel final : public LagrangianModel {
   /// Minimal coordinates for one node; none with several (the event-driven integrator then
   /// integrates contact phases as the DAE with projection).
   const ContactChart* contact_chart() const override { return K_ == 1 ? &chart_ : nullptr; }
+  const RingChart* ring_chart() const override { return ring_chart_ ? &*ring_chart_ : nullptr; }
   int spin_coordinate() const override { return th_; }
   /// Free: (q, each ring's x_s, y_s) with M, G, C, K and the rings'; Tied: q with each ring's
   /// mass, damper and spring added on its node's (x, y) (none when a ring is rigid: it pins
@@ -175,6 +177,7 @@ class MatrixModel final : public LagrangianModel {
   int slot_;
   std::vector<int> others_;
   Chart chart_;
+  std::optional<RingChart> ring_chart_;  ///< several nodes: each node's (x, y) and ring
 };
 
 }  // namespace rubdyn

@@ -75,6 +75,7 @@
 // above exactly (the same coordinates, names and arithmetic). The contact chart exists for that
 // model, and for one [[plane]] at R on a sprung ring (the same model under other names); with
 // other planes the event-driven solver uses its projection formulation.
+#include <optional>
 #include <string_view>
 #include <vector>
 
@@ -118,6 +119,7 @@ class RotorStatorModel final : public LagrangianModel {
   }
   bool plane_motion(int k, double t, VecIn q, VecIn v, PlaneMotion& out) const override;
   const ContactChart* contact_chart() const override { return chartable_ ? &chart_ : nullptr; }
+  const RingChart* ring_chart() const override { return ring_chart_ ? &*ring_chart_ : nullptr; }
   int spin_coordinate() const override { return TH; }
   /// Tied: the 4-dof (x_b, y_b, x_r, y_r) system with every sprung ring tied to the rotor at
   /// its plane (its mass, damper and spring on the rotor's point there, through the
@@ -197,9 +199,10 @@ class RotorStatorModel final : public LagrangianModel {
 
   RotorStatorParams p_;
   Chart chart_;
-  double inv_ms_ = 1.0;    // 1 / m_s of the single plane's ring
-  bool single_ = true;     // no planes: the paper's model
-  bool chartable_ = true;  // one plane at R on a sprung ring: the chart applies
+  std::optional<RingChart> ring_chart_;  ///< several planes: each plane's point and ring
+  double inv_ms_ = 1.0;                  // 1 / m_s of the single plane's ring
+  bool single_ = true;                   // no planes: the paper's model
+  bool chartable_ = true;                // one plane at R on a sprung ring: the chart applies
   int n_ = kDofs;
   std::vector<Ring> rings_;
   std::vector<Plane> planes_;
