@@ -32,6 +32,21 @@ EventDrivenOptions options(double rtol, double output_dt) {
   return o;
 }
 
+/// cases/two-plane.toml with `overrides`, run over 30 ms at rtol in both formulations of the
+/// contact phases: `reduced` (the default: the K-contact chart) and `projection`.
+struct BothFormulations {
+  MemorySink reduced_sink, projection_sink;
+  RunSummary reduced, projection;
+  BothFormulations(const std::vector<std::string>& overrides, double rtol) {
+    const CaseSpec c = load_case(RUBDYN_SOURCE_DIR "/cases/two-plane.toml", overrides);
+    const auto m = build_model(c);
+    EventDrivenOptions proj = options(rtol, 1e-4);
+    proj.contact_phases = ContactFormulation::Projection;
+    reduced = run_event_driven(*m, initial_state(c), 0.03, options(rtol, 1e-4), reduced_sink);
+    projection = run_event_driven(*m, initial_state(c), 0.03, proj, projection_sink);
+  }
+};
+
 std::vector<const EventRecord*> events_of(const MemorySink& s, EventKind k, int contact) {
   std::vector<const EventRecord*> out;
   for (const auto& e : s.events)
@@ -312,13 +327,9 @@ TEST_CASE("Event-driven with K contacts: contact phases in minimal coordinates (
   // contact/ring_chart.hpp (the summary says "reduced"), where the constraints hold by
   // construction. The projection formulation of the same run is an independent integration of
   // the same equations: they agree to the integrators' accuracy.
-  const CaseSpec c = load_case(RUBDYN_SOURCE_DIR "/cases/two-plane.toml");
-  const auto m = build_model(c);
-  EventDrivenOptions proj = options(1e-12, 1e-4);
-  proj.contact_phases = ContactFormulation::Projection;
-  MemorySink a, b;
-  const RunSummary ra = run_event_driven(*m, initial_state(c), 0.03, options(1e-12, 1e-4), a);
-  const RunSummary rb = run_event_driven(*m, initial_state(c), 0.03, proj, b);
+  const BothFormulations both({}, 1e-12);
+  const RunSummary &ra = both.reduced, &rb = both.projection;
+  const MemorySink &a = both.reduced_sink, &b = both.projection_sink;
   REQUIRE(ra.complete());
   REQUIRE(rb.complete());
   CHECK(ra.options.find("reduced+adams") != std::string::npos);
@@ -351,14 +362,8 @@ TEST_CASE("Event-driven with K contacts: rolling at both planes in minimal coord
   // chart ties each ring's angle to the spin). The energy balance closes to the integrator's
   // tolerance in the reduced formulation; the projection formulation, which takes energy out at
   // every projection, is far from it on the same run.
-  const CaseSpec c =
-      load_case(RUBDYN_SOURCE_DIR "/cases/two-plane.toml", {"plane.1.mu=0.5", "plane.2.mu=0.5"});
-  const auto m = build_model(c);
-  EventDrivenOptions proj = options(1e-10, 1e-4);
-  proj.contact_phases = ContactFormulation::Projection;
-  MemorySink a, b;
-  const RunSummary ra = run_event_driven(*m, initial_state(c), 0.03, options(1e-10, 1e-4), a);
-  const RunSummary rb = run_event_driven(*m, initial_state(c), 0.03, proj, b);
+  const BothFormulations both({"plane.1.mu=0.5", "plane.2.mu=0.5"}, 1e-10);
+  const RunSummary &ra = both.reduced, &rb = both.projection;
   REQUIRE(ra.complete());
   REQUIRE(rb.complete());
   const double flows = std::abs(ra.work_damping) + std::abs(ra.work_friction) +

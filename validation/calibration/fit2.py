@@ -51,19 +51,13 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 sys.path.insert(0, HERE)
 import common  # noqa: E402
-from common import ROOT, Run, machine, run_analyzed  # noqa: E402
+from common import ROOT, Run, machine, run_analyzed, script_args  # noqa: E402
 import campbell_model  # noqa: E402
 
 
-def default_rubdyn():
-    for p in ("build/src/app/rubdyn", "build/rubdyn"):
-        if os.path.isfile(os.path.join(ROOT, p)):
-            return os.path.join(ROOT, p)
-    return os.path.join(ROOT, "build", "rubdyn")
-
-
-ARGS = [a for a in sys.argv[1:] if not a.startswith("--")]
-RUBDYN = os.path.abspath(ARGS[0]) if ARGS else default_rubdyn()
+# `fit2.py [path/to/rubdyn]` (common.script_args: build/rubdyn by default)
+_rubdyn, _, _ = script_args("calibration2")
+RUBDYN = os.path.abspath(_rubdyn)
 NO_CLAIMS = "--no-claims" in sys.argv
 FRESH = "--fresh" in sys.argv
 OUT = os.path.join(ROOT, "out", "calibration2")

@@ -57,18 +57,12 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 import common  # noqa: E402
-from common import ROOT, Run, machine, read_csv, run_analyzed  # noqa: E402
+from common import ROOT, Run, machine, read_csv, run_analyzed, script_args  # noqa: E402
 
 
-def default_rubdyn():
-    for p in ("build/rubdyn", "build/src/app/rubdyn"):
-        if os.path.isfile(os.path.join(ROOT, p)):
-            return os.path.join(ROOT, p)
-    return os.path.join(ROOT, "build", "rubdyn")
-
-
-ARGS = [a for a in sys.argv[1:] if not a.startswith("--")]
-RUBDYN = os.path.abspath(ARGS[0]) if ARGS else default_rubdyn()
+# `restoring.py [path/to/rubdyn]` (common.script_args: build/rubdyn by default)
+_rubdyn, _, _ = script_args("restoring")
+RUBDYN = os.path.abspath(_rubdyn)
 OUT = os.path.join(ROOT, "out", "restoring")
 PAPER = os.path.join(ROOT, "cases", "paper.toml")
 MD = os.path.join(HERE, "restoring.md")
