@@ -199,16 +199,129 @@ def build_plugin(p, folder):
                     src, "-lm"], check=True)
     return lib[:-3]
 
+# Law audit of Siconos' contact solves. LAW_TOL is absolute, in m/s: the residuals below are
+# velocities (the Signorini and Coulomb maps scaled by the diagonal of W). The velocities of a
+# contact problem here are the sliding speed R omega ~ 100 m/s (|q| ~ 112 m/s) and normal
+# velocities of mm/s to m/s; forming u = W r + q in double precision leaves ~1e-16 * 100 m/s, a
+# few 1e-14 m/s (the exact ENUM solves of run_planes.py stay below 4e-14 m/s). 1e-12 m/s is 50x
+# that round-off, and a normal velocity error of 1e-12 m/s moves a position by 1e-12 h over a
+# step (1e-17 m at h = 1e-5): below the round-off agreement (1e-14 m) this study measures.
+# Siconos' own test (its tolerance relative to |q|, 1e-6 by default) lets through 1e-4 m/s.
+LAW_TOL = 1e-12
 
-def build(p, h, t_end, projected=False, newton_tol=1e-12, frozen=False):
+
+def law_check(W, q, mu, r):
+    """The distance of the impulses r from the 2D Coulomb-Signorini law of the problem
+    u = W r + q (2 rows per contact: normal, tangential; mu per contact), computed here from
+    (W, q, r) alone, as velocities [m/s], largest over the contacts:
+      signorini: |min(u_N, W_NN r_N)|, 0 iff r_N >= 0, u_N >= 0 and r_N u_N = 0;
+      cone:      W_TT max(0, |r_T| - mu max(r_N, 0)), 0 iff r is in the friction cone;
+      friction:  |W_TT r_T - clip(W_TT r_T - u_T, +-mu W_TT r_N)|, 0 iff (inside the cone)
+                 u_T = 0 or (on its edge) u_T = 0 or u_T of the sign opposite to r_T: sticking,
+                 and sliding against the friction impulse.
+    Returns (signorini, cone, friction)."""
+    u = W @ r + q
+    sig = cone = fric = 0.0
+    for c in range(len(q) // 2):
+        n, t = 2 * c, 2 * c + 1
+        rn, rt, un, ut = float(r[n]), float(r[t]), float(u[n]), float(u[t])
+        wt = float(W[t, t])
+        sig = max(sig, abs(min(un, float(W[n, n]) * rn)))
+        cone = max(cone, wt * max(0.0, abs(rt) - mu[c] * max(rn, 0.0)))
+        a = wt * rt
+        b = mu[c] * wt * max(rn, 0.0)
+        fric = max(fric, abs(a - min(max(a - ut, -b), b)))
+    return sig, cone, fric
+
+
+class LawAudit:
+    """Counts of the contact problems Siconos solved in a run and their law residuals
+    (law_check): solves (problems with at least one contact), steps with a solve, violations
+    (solves whose largest residual exceeds LAW_TOL) and the steps where one happens, the largest
+    residual per kind (signorini, cone, friction), failures (solves Siconos reports as failed,
+    info != 0), the first and the worst violating problem (t, W, q, mu, r), and the audit's own
+    time (seconds, excluded from the run's wall time)."""
+
+    def __init__(self):
+        self.solves = 0
+        self.failures = 0
+        self.violations = 0
+        self.residual = [0.0, 0.0, 0.0]
+        self.worst = 0.0
+        self.first_bad = None
+        self.worst_bad = None
+        self.step_times = set()
+        self.bad_step_times = set()
+        self.seconds = 0.0
+
+    def check(self, t, W, q, mu, r, info):
+        res = law_check(W, q, mu, r)
+        self.solves += 1
+        self.step_times.add(t)
+        self.failures += info != 0
+        self.residual = [max(a, b) for a, b in zip(self.residual, res)]
+        m = max(res)
+        if m > LAW_TOL:
+            self.violations += 1
+            self.bad_step_times.add(t)
+            if self.first_bad is None:
+                self.first_bad = (t, W, q, mu, r)
+            if m > self.worst:
+                self.worst_bad = (t, W, q, mu, r)
+        self.worst = max(self.worst, m)
+
+    def summary(self):
+        return {"law_solves": self.solves, "law_steps": len(self.step_times),
+                "law_violations": self.violations, "law_violating_steps": len(self.bad_step_times),
+                "law_residual_max": self.worst, "law_signorini_max": self.residual[0],
+                "law_cone_max": self.residual[1], "law_friction_max": self.residual[2],
+                "contact_solver_failures": self.failures}
+
+
+_AUDITED = {}
+
+
+def audited_friction_contact(solver_id, audit):
+    """A FrictionContact(2, solver_id) whose compute() (Siconos calls it once per Newton
+    iteration with a non-empty index set) hands every solved problem (W, q, mu, r = z) and the
+    solver's info to audit.check. A Python subclass through SWIG's director: Siconos' C++ calls
+    it as its own FrictionContact (the results are bitwise those of the plain class)."""
+    import time
+    import numpy as np
+    import siconos.kernel as sk
+
+    if "cls" not in _AUDITED:
+        class AuditedFrictionContact(sk.FrictionContact):
+            def compute(self, t):
+                info = sk.FrictionContact.compute(self, t)
+                t0 = time.perf_counter()
+                m = self.getSizeOutput()
+                if m > 0:
+                    self.audit.check(t, np.array(self.M().defaultMatrix()),
+                                     np.array(self.q()).ravel()[:m].copy(),
+                                     [self.getMu(c) for c in range(m // 2)],
+                                     np.array(self.z()).ravel()[:m].copy(), info)
+                self.audit.seconds += time.perf_counter() - t0
+                return info
+        _AUDITED["cls"] = AuditedFrictionContact
+    osnspb = _AUDITED["cls"](2, solver_id)
+    osnspb.audit = audit
+    return osnspb
+
+
+def build(p, h, t_end, projected=False, newton_tol=1e-12, frozen=False, solver="LEMKE",
+          solver_tol=None, audit=None):
     """Builds the Siconos simulation of the case p: Moreau-Jean (MoreauJeanOSI, theta = 1/2, with
     TimeStepping) or its projected variant (MoreauJeanDirectProjectionOSI with
     TimeSteppingDirectProjection), step h up to t_end. Settings that differ from Siconos'
-    defaults: Lemke for the 2D friction contact problem (exact), Newton tolerance newton_tol,
-    and for the projected variant the activation thresholds (0, see below) and the projection
-    tolerance (1e-14 m). frozen = True evaluates the relation's Jacobian at the positions held in
-    the system's z vector (the caller sets z = q_i before each step) instead of at every Newton
-    iterate. Returns (sim, ds, inter)."""
+    defaults: the 2D friction contact solver SICONOS_FRICTION_2D_<solver> (LEMKE or ENUM) with
+    tolerance solver_tol (dparam[0]; None: Siconos' default 1e-6, relative to |q| of the contact
+    problem), Newton tolerance newton_tol, and for the projected variant the activation
+    thresholds (0, see below) and the projection tolerance (1e-14 m). frozen = True evaluates the
+    relation's Jacobian at the positions held in the system's z vector (the caller sets z = q_i
+    before each step) instead of at every Newton iterate. audit: a LawAudit that checks every
+    contact problem Siconos solves (every Newton iteration of every step) against the law, or
+    None. Returns (sim, ds, inter)."""
     import numpy as np
     import siconos.kernel as sk
     import siconos.numerics as sn
@@ -236,8 +349,13 @@ def build(p, h, t_end, projected=False, newton_tol=1e-12, frozen=False):
     nsds.link(inter, ds)
 
     td = sk.TimeDiscretisation(0.0, h)
-    # Lemke's pivoting solves the 2D friction contact problem exactly (no iteration tolerance)
-    osnspb = sk.FrictionContact(2, sn.SICONOS_FRICTION_2D_LEMKE)
+    solver_id = getattr(sn, "SICONOS_FRICTION_2D_" + solver)
+    if audit is None:
+        osnspb = sk.FrictionContact(2, solver_id)
+    else:
+        osnspb = audited_friction_contact(solver_id, audit)
+    if solver_tol is not None:
+        osnspb.numericsSolverOptions().dparam[0] = solver_tol
     if projected:
         osi = sk.MoreauJeanDirectProjectionOSI(0.5)
         # Siconos' defaults activate the contact when the predicted gap is below 1e-7 m (half a
@@ -259,16 +377,20 @@ def build(p, h, t_end, projected=False, newton_tol=1e-12, frozen=False):
     return sim, ds, inter
 
 
-def simulate(p, h, t_end, projected=False, dt_out=1e-4, newton_tol=1e-12, frozen=False):
+def simulate(p, h, t_end, projected=False, dt_out=1e-4, newton_tol=1e-12, frozen=False,
+             solver="LEMKE", solver_tol=None, audit=False):
     """Runs build(...) step by step from Python. Returns (rows, wall_seconds, info): rows are the
     output grid every dt_out (t, q, v, F_N, F_T), wall_seconds the time of the stepping loop
     (model set-up and plug-in compilation excluded; the per-sample copy of the state included,
-    as rubdyn's wall includes its output), info the steps, Newton iterations and the largest
-    penetration over all steps."""
+    as rubdyn's wall includes its output; the audit's own time excluded), info the steps, Newton
+    iterations and the largest penetration over all steps, and with audit = True info["audit"],
+    the LawAudit of every contact problem solved (see LawAudit)."""
     import time
     import numpy as np
 
-    sim, ds, inter = build(p, h, t_end, projected, newton_tol, frozen)
+    law_audit = LawAudit() if audit else None
+    sim, ds, inter = build(p, h, t_end, projected, newton_tol, frozen, solver, solver_tol,
+                           law_audit)
     every = int(round(dt_out / h))
     if abs(every * h - dt_out) > 1e-9 * dt_out:
         raise ValueError("h = %g does not divide the output interval %g" % (h, dt_out))
@@ -297,16 +419,17 @@ def simulate(p, h, t_end, projected=False, dt_out=1e-4, newton_tol=1e-12, frozen
         if k % every == 0:
             rows.append((k * h, np.array(q), np.array(v), lam[0] / h, lam[1] / h))
         sim.nextStep()
-    wall = time.perf_counter() - t0
+    wall = time.perf_counter() - t0 - (law_audit.seconds if audit else 0.0)
     return rows, wall, {"steps": n_steps, "newton_iterations": newton,
-                        "max_penetration": max(0.0, -min_gap)}
+                        "max_penetration": max(0.0, -min_gap), "audit": law_audit}
 
 
-def simulate_native_loop(p, h, t_end):
+def simulate_native_loop(p, h, t_end, solver="LEMKE", solver_tol=None):
     """Wall time of the stock Moreau-Jean run driven by Siconos' own C++ loop
     (TimeStepping::run, no sampling), to measure what the Python loop of simulate() costs."""
     import time
-    sim = build(p, h, t_end, projected=False, frozen=False)[0]
+    sim = build(p, h, t_end, projected=False, frozen=False, solver=solver,
+                solver_tol=solver_tol)[0]
     # TimeStepping::run prints two lines on C++'s stdout: silence file descriptor 1
     sys.stdout.flush()
     saved = os.dup(1)
