@@ -65,8 +65,11 @@ struct PhaseCost {
   long steps = 0;
   std::array<long, kNumPhases> phase_steps{};
   std::array<double, kNumPhases> phase_wall{};
+  double free_time = 0.0, time = 0.0;  // simulated seconds: free flight, all
   void add(const RunSummary& s) {
     steps += s.steps;
+    free_time += s.phase_time[static_cast<int>(Phase::Free)];
+    for (double t : s.phase_time) time += t;
     for (int k = 0; k < kNumPhases; ++k) {
       phase_steps[k] += s.phase_steps[k];
       phase_wall[k] += s.phase_wall[k];
@@ -87,6 +90,8 @@ struct PhaseCost {
     st.counters["free_us"] = us({Phase::Free});
     st.counters["slip_us"] = us({Phase::SlipPos, Phase::SlipNeg});
     st.counters["stick_us"] = us({Phase::Stick});
+    // the share of simulated time in free flight (of steps, for a fixed step)
+    st.counters["free_frac"] = time > 0.0 ? free_time / time : 0.0;
   }
 };
 
@@ -172,7 +177,14 @@ BENCHMARK_CAPTURE(from_case, jeffcott_mj_50ms_h1e6, "jeffcott.toml",
 // Two rub planes (cases/two-plane.toml: 9 dofs, two contacts, both hit from 6 ms and sliding
 // after), the fixed-step schemes over 30 ms at h = 1e-6, against the one-plane reference case
 // run the same way (from its case file, through simulate: reference_*; 7 dofs, the fixed-size
-// path): the cost of a second plane per step
+// path): the cost of a second plane per step. The 5 ms runs are free flight only (both cases
+// first touch at 6 ms): with the phase fractions of the 30 ms runs they split the cost per step
+// into free flight and contact (bench/RESULTS.md, below its table)
+BENCHMARK_CAPTURE(from_case, reference_mj_5ms_h1e6, "reference.toml",
+                  {"run.t_end=0.005", "solver.kind=\"mj\"", "solver.h=1e-6"})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(from_case, two_plane_mj_5ms_h1e6, "two-plane.toml", {"run.t_end=0.005"})
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(from_case, reference_mj_30ms_h1e6, "reference.toml",
                   {"run.t_end=0.03", "solver.kind=\"mj\"", "solver.h=1e-6"})
     ->Unit(benchmark::kMillisecond);

@@ -126,5 +126,36 @@ with open("bench/RESULTS.md", "w") as f:
             f.write("| %s | %.2f | %.3g | %s | %s | %s |\n" % (
                 name, med(runs, "real_time"), med(runs, "steps/s"), cell(med(runs, "free_us")),
                 cell(med(runs, "slip_us")), cell(med(runs, "stick_us"))))
+    # one plane against two, per phase (issue 21's goal: at most twice per step in each phase)
+    def get(name, key):
+        return med(after.get(name, []), key)
+    ev2, ev1, evp = ("from_case/two_plane_event_50ms_rtol1e10", "event_driven/event_500ms_rtol1e10",
+                     "event_driven/event_500ms_rtol1e10_projection")
+    if get(ev2, "real_time") > 0 and get(ev1, "real_time") > 0:
+        f.write("\n**Two planes against one, per step and phase** (after). Event-driven "
+                "(cases/two-plane.toml, 50 ms, against the reference case's 500 ms, both at rtol "
+                "1e-10): free flight %.2f against %.2f us (%.2fx); contact (slip) %.2f against "
+                "%.2f us with minimal coordinates (%.2fx) and %.2f us with projection.\n" % (
+                    get(ev2, "free_us"), get(ev1, "free_us"),
+                    get(ev2, "free_us") / get(ev1, "free_us"), get(ev2, "slip_us"),
+                    get(ev1, "slip_us"), get(ev2, "slip_us") / get(ev1, "slip_us"),
+                    get(evp, "slip_us")))
+    split = {}
+    for case in ("reference", "two_plane"):
+        t5, t30 = "from_case/%s_mj_5ms_h1e6" % case, "from_case/%s_mj_30ms_h1e6" % case
+        if get(t5, "real_time") <= 0 or get(t30, "real_time") <= 0:
+            continue
+        n5 = get(t5, "steps/s") * get(t5, "real_time") / 1e3  # steps per run
+        n30 = get(t30, "steps/s") * get(t30, "real_time") / 1e3
+        c_free = 1e3 * get(t5, "real_time") / n5  # us per step (the 5 ms run is free flight)
+        frac = get(t30, "free_frac")
+        c_contact = (1e3 * get(t30, "real_time") - c_free * n30 * frac) / (n30 * (1.0 - frac))
+        split[case] = (c_free, c_contact, frac)
+    if len(split) == 2:
+        (f1, c1, p1), (f2, c2, p2) = split["reference"], split["two_plane"]
+        f.write("\nMoreau-Jean (`mj`, h = 1e-6), split by phase: the 5 ms runs are free flight "
+                "only, and the 30 ms runs' free-flight share (%.3f one plane, %.3f two) gives the "
+                "rest: free flight %.3f against %.3f us per step (%.2fx), steps with contact "
+                "%.3f against %.3f us (%.2fx).\n" % (p1, p2, f2, f1, f2 / f1, c2, c1, c2 / c1))
 print(open("bench/RESULTS.md").read())
 PY
