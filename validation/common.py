@@ -83,6 +83,22 @@ def script_args(name):
     return rubdyn, "--quick" in sys.argv, os.path.join(ROOT, "out", name)
 
 
+def longest_free_flight(times, phases, t0):
+    """Longest free flight [s] after t0 in a series: a run of phase 'free' between two contact
+    phases or until the end, counted from t0 when it began earlier."""
+    best, start, t = 0.0, None, None
+    for t, ph in zip(times, phases):
+        if ph == "free":
+            if start is None:
+                start = t
+        elif start is not None:
+            if t > t0:
+                best = max(best, t - max(start, t0))
+            start = None
+    if start is not None:
+        best = max(best, t - max(start, t0))
+    return best
+
 def grid_errors(grid, ref):
     """(orbit error, omega error) of a grid {k: (x_r, y_r, omega)} against a reference grid: the
     largest |r_r - r_r,ref| over the common sample times, and |omega - omega_ref| at the

@@ -39,21 +39,18 @@ bool RingChart::eliminated(std::span<const Phase> modes, int i) const {
   return k >= 0 && closed_mode(modes[static_cast<std::size_t>(k)]);
 }
 
-double RingChart::px(int k, VecIn q) const {
+double RingChart::point(const std::array<int, 2>& idx, int k, VecIn q) const {
   const RingContact& c = c_[static_cast<std::size_t>(k)];
   double x = 0.0;
-  for (int j = 0; j < 2; ++j)
-    if (c.ix[static_cast<std::size_t>(j)] >= 0)
-      x += c.w[static_cast<std::size_t>(j)] * q[c.ix[static_cast<std::size_t>(j)]];
+  for (std::size_t j = 0; j < 2; ++j)
+    if (idx[j] >= 0) x += c.w[j] * q[idx[j]];
   return x;
 }
+double RingChart::px(int k, VecIn q) const {
+  return point(c_[static_cast<std::size_t>(k)].ix, k, q);
+}
 double RingChart::py(int k, VecIn q) const {
-  const RingContact& c = c_[static_cast<std::size_t>(k)];
-  double y = 0.0;
-  for (int j = 0; j < 2; ++j)
-    if (c.iy[static_cast<std::size_t>(j)] >= 0)
-      y += c.w[static_cast<std::size_t>(j)] * q[c.iy[static_cast<std::size_t>(j)]];
-  return y;
+  return point(c_[static_cast<std::size_t>(k)].iy, k, q);
 }
 
 bool RingChart::applies(std::span<const Phase> modes) const {

@@ -47,6 +47,26 @@ struct BothFormulations {
   }
 };
 
+/// The largest difference of the rotor's coordinates (x_b, y_b, x_r, y_r) between two runs on
+/// their common output grid of step dt (the rows written at events lie at each run's own event
+/// times and are left out); `compared`: the grid points both have.
+double rotor_grid_diff(const MemorySink& a, const MemorySink& b, double dt, int& compared) {
+  auto on_grid = [&](double t) { return std::abs(t / dt - std::round(t / dt)) < 1e-9; };
+  std::map<long, const Sample*> grid_b;
+  for (const Sample& x : b.samples)
+    if (on_grid(x.t)) grid_b[std::lround(x.t / dt)] = &x;
+  double dq = 0.0;
+  compared = 0;
+  for (const Sample& x : a.samples) {
+    if (!on_grid(x.t)) continue;
+    const auto it = grid_b.find(std::lround(x.t / dt));
+    if (it == grid_b.end()) continue;
+    dq = std::max(dq, (x.q.head(4) - it->second->q.head(4)).cwiseAbs().maxCoeff());
+    ++compared;
+  }
+  return dq;
+}
+
 std::vector<const EventRecord*> events_of(const MemorySink& s, EventKind k, int contact) {
   std::vector<const EventRecord*> out;
   for (const auto& e : s.events)
@@ -253,20 +273,8 @@ TEST_CASE("Event-driven with K contacts: the two-plane rotor", "[events][multi]"
   // 4.9e-13, 3.0e-14 m at rtol 1e-8, 1e-9, 1e-10, 1e-11 (the projection formulation: 9.0e-11,
   // 8.0e-12, 1.5e-12, 2.2e-13). Here rtol 1e-10 against 1e-12, measured 1.8e-12 m: 1e-11 m is a
   // margin of about 5.
-  const double dt = 1e-4;
-  auto on_grid = [&](double t) { return std::abs(t / dt - std::round(t / dt)) < 1e-9; };
-  std::map<long, const Sample*> grid_b;
-  for (const Sample& x : b.samples)
-    if (on_grid(x.t)) grid_b[std::lround(x.t / dt)] = &x;
-  double dq = 0.0;
   int compared = 0;
-  for (const Sample& x : a.samples) {
-    if (!on_grid(x.t)) continue;
-    const auto it = grid_b.find(std::lround(x.t / dt));
-    if (it == grid_b.end()) continue;
-    dq = std::max(dq, (x.q.head(4) - it->second->q.head(4)).cwiseAbs().maxCoeff());
-    ++compared;
-  }
+  const double dq = rotor_grid_diff(a, b, 1e-4, compared);
   CHECK(compared >= 290);
   INFO("rtol 1e-10 vs 1e-12: largest difference " << dq << " m");
   CHECK(dq < 1e-11);
@@ -338,18 +346,9 @@ TEST_CASE("Event-driven with K contacts: contact phases in minimal coordinates (
   // 1e-4 m are 1e-20 m); the projection stops at its own tolerance
   INFO("drift reduced " << ra.max_drift_position << " m, projection " << rb.max_drift_position);
   CHECK(ra.max_drift_position < 1e-18);
-  const double dt = 1e-4;
-  auto on_grid = [&](double t) { return std::abs(t / dt - std::round(t / dt)) < 1e-9; };
-  std::map<long, const Sample*> grid_b;
-  for (const Sample& x : b.samples)
-    if (on_grid(x.t)) grid_b[std::lround(x.t / dt)] = &x;
-  double dq = 0.0;
-  for (const Sample& x : a.samples) {
-    if (!on_grid(x.t)) continue;
-    const auto it = grid_b.find(std::lround(x.t / dt));
-    if (it != grid_b.end())
-      dq = std::max(dq, (x.q.head(4) - it->second->q.head(4)).cwiseAbs().maxCoeff());
-  }
+  int compared = 0;
+  const double dq = rotor_grid_diff(a, b, 1e-4, compared);
+  CHECK(compared >= 290);
   // measured 6.6e-14 m on the output grid (the projection's own self-convergence at rtol 1e-12,
   // the tighter of the two: a few 1e-14 m); 1e-12 m is a margin of 15
   INFO("reduced vs projection at rtol 1e-12: " << dq << " m");

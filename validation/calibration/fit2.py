@@ -348,21 +348,9 @@ def screen_runs(base_case, base, cid, sets, extra_sets, folder):
 
 
 def longest_free(folder, t0):
-    """Longest free flight [s] (phase 'free' between two contact phases or the end) after t0."""
+    """Longest free flight [s] after t0 in a run's timeseries.csv."""
     rows = common.read_rows(os.path.join(folder, "timeseries.csv"))
-    best, start = 0.0, None
-    for r in rows:
-        t = float(r["t"])
-        if r["phase"] == "free":
-            if start is None:
-                start = t
-        elif start is not None:
-            if t > t0:
-                best = max(best, t - max(start, t0))
-            start = None
-    if start is not None:
-        best = max(best, float(rows[-1]["t"]) - max(start, t0))
-    return best
+    return common.longest_free_flight([float(r["t"]) for r in rows], [r["phase"] for r in rows], t0)
 
 
 def top_crossing(p):

@@ -57,7 +57,8 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 import common  # noqa: E402
-from common import ROOT, Run, machine, read_csv, run_analyzed, script_args  # noqa: E402
+from common import (ROOT, Run, longest_free_flight, machine, read_csv, run_analyzed,  # noqa: E402
+                    script_args)
 
 
 # `restoring.py [path/to/rubdyn]` (common.script_args: build/rubdyn by default)
@@ -329,18 +330,7 @@ def campbell(case, folder, omega, sets=()):
 
 def longest_free(s, t0):
     """Longest free flight [s] (phase 'free') after t0 in a series."""
-    best, start = 0.0, None
-    for t, ph in zip(s["t"], s["phase"]):
-        if ph == "free":
-            if start is None:
-                start = t
-        elif start is not None:
-            if t > t0:
-                best = max(best, t - max(start, t0))
-            start = None
-    if start is not None:
-        best = max(best, s["t"][-1] - max(start, t0))
-    return best
+    return longest_free_flight(s["t"], s["phase"], t0)
 
 
 def contact_after(run, t0):

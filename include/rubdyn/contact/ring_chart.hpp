@@ -76,6 +76,8 @@ class RingChart {
   void lengths(std::span<const Phase> modes, std::span<double> L) const;
 
  private:
+  /// sum_j w[j] q[idx[j]]: one coordinate of contact k's rotor point (idx: its ix or iy)
+  double point(const std::array<int, 2>& idx, int k, VecIn q) const;
   double px(int k, VecIn q) const;
   double py(int k, VecIn q) const;
   /// Coordinate i is a closed contact's ring coordinate (eliminated).
