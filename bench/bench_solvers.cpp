@@ -196,15 +196,27 @@ BENCHMARK_CAPTURE(from_case, reference_mj_proj_30ms_h1e6, "reference.toml",
 BENCHMARK_CAPTURE(from_case, two_plane_mj_proj_30ms_h1e6, "two-plane.toml",
                   {"run.t_end=0.03", "solver.kind=\"mj-proj\""})
     ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(from_case, reference_mj_proj_5ms_h1e6, "reference.toml",
+                  {"run.t_end=0.005", "solver.kind=\"mj-proj\"", "solver.h=1e-6"})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(from_case, two_plane_mj_proj_5ms_h1e6, "two-plane.toml",
+                  {"run.t_end=0.005", "solver.kind=\"mj-proj\""})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(from_case, reference_carp_onevc_5ms_h1e6, "reference.toml",
+                  {"run.t_end=0.005", "solver.kind=\"carp-onevc\"", "solver.h=1e-6"})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(from_case, two_plane_carp_onevc_5ms_h1e6, "two-plane.toml",
+                  {"run.t_end=0.005", "solver.kind=\"carp-onevc\""})
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(from_case, reference_carp_onevc_30ms_h1e6, "reference.toml",
                   {"run.t_end=0.03", "solver.kind=\"carp-onevc\"", "solver.h=1e-6"})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(from_case, two_plane_carp_onevc_30ms_h1e6, "two-plane.toml",
                   {"run.t_end=0.03", "solver.kind=\"carp-onevc\""})
     ->Unit(benchmark::kMillisecond);
-// the event-driven solver on the same case (its contact phases as the DAE with projection, the
-// only formulation with several contacts): per-step costs against the one-plane
-// event_500ms_rtol1e10_projection above, phase by phase
+// the event-driven solver on the same case (its contact phases in minimal coordinates, each
+// plane having its own sprung ring): per-step costs against the one-plane event_500ms_rtol1e10
+// (and its _projection) above, phase by phase
 BENCHMARK_CAPTURE(from_case, two_plane_event_50ms_rtol1e10, "two-plane.toml",
                   {"run.t_end=0.05", "solver.kind=\"event\""})
     ->Unit(benchmark::kMillisecond);

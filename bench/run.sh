@@ -140,22 +140,43 @@ with open("bench/RESULTS.md", "w") as f:
                     get(ev2, "free_us") / get(ev1, "free_us"), get(ev2, "slip_us"),
                     get(ev1, "slip_us"), get(ev2, "slip_us") / get(ev1, "slip_us"),
                     get(evp, "slip_us")))
-    split = {}
-    for case in ("reference", "two_plane"):
-        t5, t30 = "from_case/%s_mj_5ms_h1e6" % case, "from_case/%s_mj_30ms_h1e6" % case
-        if get(t5, "real_time") <= 0 or get(t30, "real_time") <= 0:
+    # the fixed-step schemes split by phase: the 5 ms runs are free flight only (both cases
+    # first touch at 6 ms), and the 30 ms runs' free-flight share gives the rest. Split in each
+    # round from that round's four runs (measured within minutes of each other), then the
+    # median and range of the rounds' ratios
+    def split(runs5, runs30):
+        n5 = runs5["steps/s"] * runs5["real_time"] / 1e3  # steps per run
+        n30 = runs30["steps/s"] * runs30["real_time"] / 1e3
+        c_free = 1e3 * runs5["real_time"] / n5  # us per step
+        frac = runs30["free_frac"]
+        c_contact = (1e3 * runs30["real_time"] - c_free * n30 * frac) / (n30 * (1.0 - frac))
+        return c_free, c_contact, frac
+    lines = []
+    for solver, label in (("mj", "Moreau-Jean (`mj`)"), ("mj_proj", "`mj-proj`"),
+                          ("carp_onevc", "Carpenter (`carp-onevc`)")):
+        names = ["from_case/%s_%s_%sms_h1e6" % (c, solver, d)
+                 for c in ("reference", "two_plane") for d in ("5", "30")]
+        series = [after.get(n, []) for n in names]
+        if any(not x for x in series):
             continue
-        n5 = get(t5, "steps/s") * get(t5, "real_time") / 1e3  # steps per run
-        n30 = get(t30, "steps/s") * get(t30, "real_time") / 1e3
-        c_free = 1e3 * get(t5, "real_time") / n5  # us per step (the 5 ms run is free flight)
-        frac = get(t30, "free_frac")
-        c_contact = (1e3 * get(t30, "real_time") - c_free * n30 * frac) / (n30 * (1.0 - frac))
-        split[case] = (c_free, c_contact, frac)
-    if len(split) == 2:
-        (f1, c1, p1), (f2, c2, p2) = split["reference"], split["two_plane"]
-        f.write("\nMoreau-Jean (`mj`, h = 1e-6), split by phase: the 5 ms runs are free flight "
-                "only, and the 30 ms runs' free-flight share (%.3f one plane, %.3f two) gives the "
-                "rest: free flight %.3f against %.3f us per step (%.2fx), steps with contact "
-                "%.3f against %.3f us (%.2fx).\n" % (p1, p2, f2, f1, f2 / f1, c2, c1, c2 / c1))
+        per = []  # (free ratio, contact ratio, the two splits) per round
+        for r1_5, r1_30, r2_5, r2_30 in zip(*series):
+            f1, c1, p1 = split(r1_5, r1_30)
+            f2, c2, p2 = split(r2_5, r2_30)
+            per.append((f2 / f1, c2 / c1, f1, c1, f2, c2, p1, p2))
+        m = [statistics.median(x[i] for x in per) for i in range(8)]
+        rng = lambda i: "%.2f-%.2f" % (min(x[i] for x in per), max(x[i] for x in per))
+        lines.append("| %s | %.3f | %.3f | %.2fx (%s) | %.3f | %.3f | %.2fx (%s) | %.3f / %.3f |"
+                     % (label, m[2], m[4], m[0], rng(0), m[3], m[5], m[1], rng(1), m[6], m[7]))
+    if lines:
+        f.write("\n**Fixed-step schemes, two planes against one, per step and phase** (after; "
+                "h = 1e-6, cases/two-plane.toml against the reference case): the 5 ms runs are "
+                "free flight only, and each 30 ms run's free-flight share gives the steps with "
+                "contact; split in each of the %d %s, medians (range over them).\n\n"
+                "| solver | free, one plane [us/step] | two planes | ratio | contact, one plane "
+                "[us/step] | two planes | ratio | free-flight share one / two |\n"
+                "|---|---|---|---|---|---|---|---|\n" % (
+                    len(per), "rounds" if ref else "runs (a file of medians)"))
+        f.write("\n".join(lines) + "\n")
 print(open("bench/RESULTS.md").read())
 PY

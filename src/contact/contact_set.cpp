@@ -63,8 +63,12 @@ int rank_of(Phase p) {
 /// Solves A x = b (m x m, row-major in a[], m <= kCapRows) by Gaussian elimination with full
 /// pivoting. False when a pivot falls below kSingularPivot times the largest entry of A; else
 /// kappa = largest / smallest pivot (>= 1), the estimate of A's condition the margins use.
-bool solve_full_pivot(double (&a)[kCapRows][kCapRows], double (&b)[kCapRows], int m,
-                      double (&x)[kCapRows], double& kappa) {
+/// M: the size known at compile time (the loops unrolled; solve_full_pivot dispatches), the same
+/// operations in the same order for every M.
+template <int M>
+bool solve_full_pivot_m(double (&a)[kCapRows][kCapRows], double (&b)[kCapRows],
+                        double (&x)[kCapRows], double& kappa) {
+  constexpr int m = M;
   kappa = 1.0;
   int col[kCapRows];
   double scale = 0.0;
@@ -108,6 +112,22 @@ bool solve_full_pivot(double (&a)[kCapRows][kCapRows], double (&b)[kCapRows], in
   return true;
 }
 
+bool solve_full_pivot(double (&a)[kCapRows][kCapRows], double (&b)[kCapRows], int m,
+                      double (&x)[kCapRows], double& kappa) {
+  static_assert(kCapRows == 8);
+  switch (m) {
+    case 0: return solve_full_pivot_m<0>(a, b, x, kappa);
+    case 1: return solve_full_pivot_m<1>(a, b, x, kappa);
+    case 2: return solve_full_pivot_m<2>(a, b, x, kappa);
+    case 3: return solve_full_pivot_m<3>(a, b, x, kappa);
+    case 4: return solve_full_pivot_m<4>(a, b, x, kappa);
+    case 5: return solve_full_pivot_m<5>(a, b, x, kappa);
+    case 6: return solve_full_pivot_m<6>(a, b, x, kappa);
+    case 7: return solve_full_pivot_m<7>(a, b, x, kappa);
+    default: return solve_full_pivot_m<8>(a, b, x, kappa);
+  }
+}
+
 Level level_of(double margin, double tol) {
   return margin > tol ? Level::Strict : (margin >= -tol ? Level::Boundary : Level::Violated);
 }
@@ -141,9 +161,13 @@ struct ModeEval {
 /// Solves combination `mode` (one mode per contact) and judges it; false when its system is
 /// singular and inconsistent (ill-posed: not a candidate). The enumeration and the first-guess
 /// path (solve_guess) both call this, so that a guess taken is the enumeration's answer to the bit.
-bool eval_mode(MatIn W, VecIn u0, std::span<const SetContact> c, const Phase* mode, SetBand band,
-               const DataScale& scale, ModeEval& ev) {
-  const int K = static_cast<int>(c.size());
+/// KC: K known at compile time (1 to kCapK, the loops over the contacts unrolled: a Moreau-Jean
+/// step with two contacts evaluates its guess at every Newton iterate), or 0 (K = c.size()). The
+/// same operations in the same order either way, so the same bits.
+template <int KC>
+bool eval_mode_k(MatIn W, VecIn u0, std::span<const SetContact> c, const Phase* mode, SetBand band,
+                 const DataScale& scale, ModeEval& ev) {
+  const int K = KC > 0 ? KC : static_cast<int>(c.size());
   double a[kCapRows][kCapRows], rhs[kCapRows], x[kCapRows];
   int row[kCapRows];
   int n_closed = 0, n_slip = 0, lex = 0;
@@ -270,6 +294,17 @@ bool eval_mode(MatIn W, VecIn u0, std::span<const SetContact> c, const Phase* mo
   ev.n_slip = n_slip;
   ev.lex = lex;
   return true;
+}
+
+bool eval_mode(MatIn W, VecIn u0, std::span<const SetContact> c, const Phase* mode, SetBand band,
+               const DataScale& scale, ModeEval& ev) {
+  switch (c.size()) {
+    case 1: return eval_mode_k<1>(W, u0, c, mode, band, scale, ev);
+    case 2: return eval_mode_k<2>(W, u0, c, mode, band, scale, ev);
+    case 3: return eval_mode_k<3>(W, u0, c, mode, band, scale, ev);
+    case 4: return eval_mode_k<4>(W, u0, c, mode, band, scale, ev);
+    default: return eval_mode_k<0>(W, u0, c, mode, band, scale, ev);
+  }
 }
 
 /// The enumeration's result (K <= kCapK).

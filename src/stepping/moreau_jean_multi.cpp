@@ -43,8 +43,8 @@ StepOutcome MoreauJean<N, Multi>::step_multi(double t, StepReport& r, std::strin
   auto delassus = [&] {  // W^T Mt^{-1} W of the active contacts, with the current matrix
     for (int a = 0; a < na; ++a) {
       const auto ia = static_cast<std::size_t>(a);
-      newton_.apply_inverse(w.WNk[ia], w.XNk[ia]);
-      newton_.apply_inverse(w.WTk[ia], w.XTk[ia]);
+      newton_.apply_inverse_sparse(w.WNk[ia], w.XNk[ia]);
+      newton_.apply_inverse_sparse(w.WTk[ia], w.XTk[ia]);
     }
     for (int a = 0; a < na; ++a)
       for (int b = 0; b < na; ++b) {
@@ -54,6 +54,12 @@ StepOutcome MoreauJean<N, Multi>::step_multi(double t, StepReport& r, std::strin
         w.Wd(2 * a + 1, 2 * b) = w.WTk[ia].dot(w.XNk[ib]);
         w.Wd(2 * a + 1, 2 * b + 1) = w.WTk[ia].dot(w.XTk[ib]);
       }
+    // the uniqueness certificate depends on W only: once per W, not at every Newton iterate
+    // that reuses it (contact_set.hpp, solve_guess's known_unique)
+    if (na > 1)
+      w.unique = unique_by_monotonicity(
+          w.Wd.topLeftCorner(2 * na, 2 * na),
+          std::span<const SetContact>(w.sc.data(), static_cast<std::size_t>(na)));
   };
   if (!newton_.needs_matrix() && na > 0) delassus();
   bool solved = false;  // the last iterate solved a contact problem (w.set holds it)
@@ -96,7 +102,8 @@ StepOutcome MoreauJean<N, Multi>::step_multi(double t, StepReport& r, std::strin
         for (std::size_t a = 0; a < una; ++a)
           w.guess[a] = w.last_mode[static_cast<std::size_t>(w.act[a])];
         o = w.set.solve_guess(W, u0, std::span<const SetContact>(w.sc.data(), una),
-                              contact_set_band(W, u0), std::span<const Phase>(w.guess.data(), una));
+                              contact_set_band(W, u0), std::span<const Phase>(w.guess.data(), una),
+                              w.unique);
         if (has_solution(o))
           for (int a = 0; a < na; ++a) {
             const auto ia = static_cast<std::size_t>(a);

@@ -133,6 +133,25 @@ class SimplifiedNewton {
   const SMat<N>& inverse() const { return inv_; }
   /// y = J^{-1} x with the kept inverse.
   void apply_inverse(const SVec<N>& x, SVec<N>& y) const { mat_vec<N>(inv_, x, y); }
+  /// The same for a sparse x (a contact's W_N or W_T: 6 or 7 of the two-plane rotor's 9
+  /// entries are not zero): the columns of its zero entries skipped. Above 8 dofs and for
+  /// dynamic sizes the sums of apply_inverse less their zero terms, so the same numbers (up to
+  /// the sign of a zero); fixed sizes up to 8 use apply_inverse itself.
+  void apply_inverse_sparse(const SVec<N>& x, SVec<N>& y) const {
+    if constexpr (N != Eigen::Dynamic && N <= 8) {
+      mat_vec<N>(inv_, x, y);
+    } else {
+      const Eigen::Index n = inv_.rows();
+      const double* a = inv_.data();
+      y.setZero();
+      for (Eigen::Index j = 0; j < n; ++j) {
+        const double xj = x[j];
+        if (xj == 0.0) continue;
+        const double* col = a + j * n;
+        for (Eigen::Index i = 0; i < n; ++i) y[i] += col[i] * xj;
+      }
+    }
+  }
 
   enum class Next { Iterate, Converged, Failed };
   /// After an iteration whose change has the scaled norm `norm` (1 = the tolerance).
