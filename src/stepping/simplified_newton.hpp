@@ -30,6 +30,15 @@ template <int N>
 inline void mat_vec(const SMat<N>& A, const SVec<N>& x, SVec<N>& y) {
   if constexpr (N != Eigen::Dynamic && N <= 8) {
     y.noalias() = A * x;
+  } else if constexpr (N != Eigen::Dynamic) {
+    // the same sums as the loop below, y held in registers across the columns (the loop stores
+    // and reloads y for each column)
+    const double* a = A.data();
+    double acc[N];
+    for (int i = 0; i < N; ++i) acc[i] = a[i] * x[0];
+    for (int j = 1; j < N; ++j)
+      for (int i = 0; i < N; ++i) acc[i] += a[j * N + i] * x[j];
+    for (int i = 0; i < N; ++i) y[i] = acc[i];
   } else {
     const Eigen::Index n = A.rows(), m = A.cols();
     const double* a = A.data();

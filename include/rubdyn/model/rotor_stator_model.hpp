@@ -92,6 +92,8 @@ class RotorStatorModel final : public LagrangianModel {
   /// The dofs of the paper's model (one plane at R on a sprung ring); with planes, 5 plus two
   /// per sprung ring.
   static constexpr int kDofs = 7;
+  /// Two planes, each on a sprung ring of its own (the steppers' 9-dof fixed-size path).
+  static constexpr int kTwoPlaneDofs = 9;
   explicit RotorStatorModel(const RotorStatorParams& p);
 
   std::string_view name() const override { return "rigid-rotor"; }
