@@ -238,7 +238,7 @@ struct Projector {
 /// One CVODE session: free flight in full coordinates (q, v, works; Adams or BDF, no contact
 /// forces), the contact DAE in full coordinates (BDF with projection, the closed contacts of
 /// the shared modes), or, with a RingChart, a contact phase in its reduced coordinates
-/// (p, p', works) of size `dim` (ring_chart.hpp: every closed contact on a ring of its own;
+/// (p, p', works) of size `dim` (ring_chart.hpp: closed contacts on sprung or fixed rings;
 /// Adams or BDF, no projection: the constraints hold by construction). A reduced session serves
 /// every mode tuple of its dimension: its error weights are set at each restart. Every buffer
 /// is sized when built: rhs, roots and projection allocate nothing.
@@ -303,8 +303,9 @@ class MultiSystem {
   void restart(double t, Vec& q, Vec& v, const Works& w, double t_stop) {
     if (contact_) place(t, q, v);
     if (chart_) {
+      chart_->plan(sh_.modes, plan_);  // the modes' eliminations, for every rhs of the phase
       chart_->chart(sh_.modes, q, v, anchor_, p_, pd_);
-      chart_->embed(sh_.modes, anchor_, p_, pd_, q, v);
+      chart_->embed(sh_.modes, plan_, anchor_, p_, pd_, q, v);
       VMap(ys_.data(), dim_) = p_;
       VMap(ys_.data() + dim_, dim_) = pd_;
       // error weights of this mode tuple's coordinates: a copied coordinate rtol |p| + atol_q,
@@ -393,7 +394,7 @@ class MultiSystem {
   /// The full state of a session state y (the embedding of the chart in a reduced session).
   void to_full(const double* y, Vec& q, Vec& v) const {
     if (chart_) {
-      chart_->embed(sh_.modes, anchor_, CMap(y, dim_), CMap(y + dim_, dim_), q, v);
+      chart_->embed(sh_.modes, plan_, anchor_, CMap(y, dim_), CMap(y + dim_, dim_), q, v);
     } else {
       q = CMap(y, n_);
       v = CMap(y + n_, n_);
@@ -449,7 +450,7 @@ class MultiSystem {
     self->op_.compute(self->m_, t, self->q_, self->v_);
     if (!self->ms_.solve(self->op_, self->sh_.modes, self->sh_.laws)) return 1;
     VMap(yd, d) = CMap(y + d, d);
-    self->chart_->reduce(self->sh_.modes, self->q_, self->ms_.a, VMap(yd + d, d));
+    self->chart_->reduce(self->sh_.modes, self->plan_, self->q_, self->ms_.a, VMap(yd + d, d));
     self->powers(t, self->q_, self->v_, self->ms_.a, self->op_, yd + 2 * d);
     return all_finite(self->ms_.a) ? 0 : 1;
   }
@@ -499,6 +500,7 @@ class MultiSystem {
   const int dim_;           ///< coordinates of the session state (n_ unless reduced)
   SessionSettings settings_;
   RingAnchor anchor_;
+  RingChart::Plan plan_;  // the chart's eliminations for the modes of the last restart
   mutable MultiOps op_;
   mutable ModeSolve ms_;
   mutable Projector pr_;
@@ -1200,13 +1202,14 @@ class MultiIntegrator {
 
 RunSummary MultiIntegrator::run(const MechanicalState& init, double t_end) {
   t_end_ = t_end;
-  // contact phases: minimal coordinates where the model's ring chart composes (each closed
-  // contact on a sprung ring of its own), the projection formulation for the other phases
+  // contact phases: minimal coordinates where the model's ring chart applies (closed contacts
+  // on sprung rings of their own or on fixed rings of full rank), the projection formulation
+  // for the other phases
   const RingChart* rc = m_.ring_chart();
   const bool reduced = opt_.contact_phases == ContactFormulation::Reduced && rc != nullptr &&
                        rc->contact_count() == K_;
   const std::string phases =
-      reduced ? fmt::format("reduced+{} (bdf+projection where a ring is shared or fixed)",
+      reduced ? fmt::format("reduced+{} (bdf+projection where the ring chart does not apply)",
                             opt_.contact_adams ? "adams" : "bdf")
               : std::string("bdf+projection");
   env_.emplace(opt_, sink_, init.t, t_end, m_.mechanical_energy(init.t, init.q, init.v), law(0).mu,

@@ -5,7 +5,8 @@
 // equally, a joint Zeno truncation), a rod sliding flat (exact deceleration and stick time), a rod
 // dropped tilted (one end lands first: stick at one contact while the other is open, then both),
 // the two-plane rotor (energy balance, invariants, self-convergence), and its contact phases in
-// the K-contact chart (ring_chart.hpp) against the projection formulation, sliding and rolling.
+// the K-contact chart (ring_chart.hpp) against the projection formulation, sliding and rolling,
+// on sprung and on fixed rings.
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -15,6 +16,7 @@
 #include "rubdyn/hybrid/event_driven.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/model_registry.hpp"
+#include "support/fixed_rings.hpp"
 #include "support/multi_problems.hpp"
 #include "support/problems.hpp"
 #include "support/split_ring.hpp"
@@ -37,8 +39,11 @@ EventDrivenOptions options(double rtol, double output_dt) {
 struct BothFormulations {
   MemorySink reduced_sink, projection_sink;
   RunSummary reduced, projection;
-  BothFormulations(const std::vector<std::string>& overrides, double rtol) {
-    const CaseSpec c = load_case(RUBDYN_SOURCE_DIR "/cases/two-plane.toml", overrides);
+  BothFormulations(const std::vector<std::string>& overrides, double rtol)
+      : BothFormulations(load_case(RUBDYN_SOURCE_DIR "/cases/two-plane.toml", overrides), rtol, 0) {
+  }
+  /// Another case (the int only tells the constructors apart).
+  BothFormulations(const CaseSpec& c, double rtol, int) {
     const auto m = build_model(c);
     EventDrivenOptions proj = options(rtol, 1e-4);
     proj.contact_phases = ContactFormulation::Projection;
@@ -376,5 +381,61 @@ TEST_CASE("Event-driven with K contacts: rolling at both planes in minimal coord
   // a margin of 12 on the reduced one and 300 times below the projection's
   CHECK(ra.phase_time[static_cast<int>(Phase::Stick)] > 0.003);
   CHECK(std::abs(ra.energy_residual) < 1e-8 * flows);
+  CHECK(ra.max_drift_position < 1e-18);
+}
+
+TEST_CASE("Event-driven with K contacts: minimal coordinates on fixed rings", "[events][multi]") {
+  // cases/two-plane.toml with plane 2's ring fixed, then both rings fixed: the chart solves the
+  // fixed rings' equations for rotor coordinates (ring_chart.hpp, FIXED RING). Against the
+  // projection formulation of the same runs, and on the constraints to round-off.
+  for (const bool both_fixed : {false, true}) {
+    INFO((both_fixed ? "both rings fixed" : "plane 2's ring fixed"));
+    const BothFormulations both(
+        parse_case(rubdyn::testing::two_plane_fixed_rings_text(both_fixed, true), "two-plane.toml"),
+        1e-12, 0);
+    const RunSummary &ra = both.reduced, &rb = both.projection;
+    REQUIRE(ra.complete());
+    REQUIRE(rb.complete());
+    // every contact phase charted: no projection step counted (both contacts close in it)
+    CHECK(ra.options.find("reduced+adams") != std::string::npos);
+    INFO("drift reduced " << ra.max_drift_position << " m, projection " << rb.max_drift_position
+                          << " m; contact time "
+                          << 0.03 - ra.phase_time[static_cast<int>(Phase::Free)] << " s");
+    CHECK(ra.phase_time[static_cast<int>(Phase::Free)] < 0.029);  // it does rub
+    // |P| = g (fixed) and |P - S| = g (sprung) by construction: ulps of 1e-4 m, 1e-20 m each
+    CHECK(ra.max_drift_position < 1e-18);
+    int compared = 0;
+    const double dq = rotor_grid_diff(both.reduced_sink, both.projection_sink, 1e-4, compared);
+    CHECK(compared >= 290);
+    // measured 7.2e-14 m (plane 2 fixed) and 1.2e-13 m (both fixed), as on sprung rings (the
+    // projection's own accuracy at rtol 1e-12); 1e-12 m is a margin of 8
+    INFO("reduced vs projection at rtol 1e-12: " << dq << " m");
+    CHECK(dq < 1e-12);
+  }
+}
+
+TEST_CASE("Event-driven with K contacts: rolling on two fixed rings in minimal coordinates",
+          "[events][multi]") {
+  // both rings fixed, mu = 0.5 at both: whip, then rolling at both planes (the rotor's four
+  // lateral coordinates tied to the spin). As on sprung rings, the reduced run closes its
+  // energy balance to the integrator's tolerance; the projection takes energy out at each step.
+  const BothFormulations both(parse_case(rubdyn::testing::two_plane_fixed_rings_text(true, true),
+                                         "two-plane.toml", {"plane.1.mu=0.5", "plane.2.mu=0.5"}),
+                              1e-10, 0);
+  const RunSummary &ra = both.reduced, &rb = both.projection;
+  REQUIRE(ra.complete());
+  REQUIRE(rb.complete());
+  const double flows = std::abs(ra.work_damping) + std::abs(ra.work_friction) +
+                       std::abs(ra.work_torque) + std::abs(ra.work_impacts);
+  INFO("stick fraction " << ra.phase_time[static_cast<int>(Phase::Stick)] / 0.03
+                         << "; energy residual reduced " << ra.energy_residual << " J, projection "
+                         << rb.energy_residual << " J of flows " << flows << " J; drift "
+                         << ra.max_drift_position << " m");
+  // measured (rtol 1e-10, atol 1e-13): stick 56 % of the 30 ms; residual 4.6e-5 J of 7.8e4 J
+  // of flows (6e-10), the projection 0.13 J (1.7e-6); 1e-8 of the flows is a margin of 17 on
+  // the reduced one and 170 times below the projection's
+  CHECK(ra.phase_time[static_cast<int>(Phase::Stick)] > 0.01);
+  CHECK(std::abs(ra.energy_residual) < 1e-8 * flows);
+  CHECK(std::abs(rb.energy_residual) > 1e-8 * flows);
   CHECK(ra.max_drift_position < 1e-18);
 }

@@ -1,6 +1,6 @@
 #pragma once
-// Minimal coordinates of contact phases with several closed contacts, where each closed contact
-// has a sprung ring of its own (the rigid rotor's [[plane]]s, a matrices model's
+// Minimal coordinates of contact phases with several closed contacts, each on a sprung ring of
+// its own or on a fixed ring (the rigid rotor's [[plane]]s, a matrices model's
 // [[contact_node]]s): the K-contact counterpart of contact_chart.hpp.
 //
 // Contact k touches when the rotor's point P_k (a fixed linear combination of coordinates: the
@@ -12,18 +12,32 @@
 // So a sliding contact replaces its ring's (x_s, y_s) by phi_k (one coordinate fewer), and a
 // sticking one ties phi_k to the spin, phi_k = phi_k0 - (R_k / g_k)(theta - theta0) (rolling:
 // two fewer). Each contact's elimination touches only its own ring's coordinates, so the charts
-// of the contacts compose: any set of closed contacts whose rings are sprung, distinct, and
-// none of them a coordinate of another closed contact's rotor point. A set that shares a ring
-// (a split ring, two contacts on one ring) or touches a fixed ring does not: the integrator then
-// uses the projection formulation for that phase.
+// of such contacts compose.
+//
+// A FIXED RING (centre at the origin, no coordinates) constrains the rotor itself:
+//     P_k(q) = g_k (cos phi_k, sin phi_k),
+// two linear equations (x and y) in the rotor coordinates of P_k, with the same v_t,k and the
+// same stick rule. The closed contacts on fixed rings together eliminate two rotor coordinates
+// each: their x equations (and, separately, their y equations) are solved for as many of the
+// coordinates they involve, the pivots chosen by Gaussian elimination with full pivoting over
+// those coordinates (deterministic: the largest entry, the lowest index on ties). The rest of
+// the state fixes the pivots, then the sprung rings follow from the completed rotor points. It
+// composes when that system has full rank (a pivot above kRingChartPivot of the largest entry):
+// two fixed planes of the rigid rotor at different positions eliminate x_b, x_r (and y_b, y_r);
+// a third fixed plane, or two at one position, do not (redundant or over-determined).
+//
+// The chart does not apply (the integrator uses the projection formulation for that phase): to a
+// ring shared by two closed contacts, to stick without a spin coordinate (a prescribed speed
+// makes the rolling constraint depend on time), to a rotor point that moves with the spin or
+// with a closed contact's sprung ring, and to fixed rings whose equations are rank-deficient.
 //
 // Reduced coordinates p of a mode tuple: the model's coordinates in their order without the
-// closed contacts' ring coordinates (the spin stored as theta - theta0 when a contact sticks, for
-// precision, as contact_chart.hpp does), then phi_k of each sliding contact in contact order.
-// Accelerations: `reduce` takes the constrained acceleration a of the full model (which
-// satisfies every closed contact's constraint at acceleration level) and returns p'' (the
-// copied coordinates' a, and phi_k'' = (-sin phi, cos phi) . (P'' - S'') / g_k).
-// Nothing here allocates.
+// closed contacts' ring coordinates and the fixed rings' pivots (the spin stored as theta - theta0
+// when a contact sticks, for precision, as contact_chart.hpp does), then phi_k of each sliding
+// contact in contact order. Accelerations: `reduce` takes the constrained acceleration a of the
+// full model (which satisfies every closed contact's constraint at acceleration level) and returns
+// p'' (the copied coordinates' a, and phi_k'' = (-sin phi, cos phi) . (P'' - S'') / g_k, S'' = 0
+// for a fixed ring). Nothing here allocates.
 #include <array>
 #include <span>
 #include <vector>
@@ -32,6 +46,10 @@
 #include "rubdyn/core/types.hpp"
 
 namespace rubdyn {
+
+/// The fixed rings' equations are rank-deficient below this pivot (relative to their largest
+/// coefficient): their contacts are redundant or over-determine the rotor.
+inline constexpr double kRingChartPivot = 1e-9;
 
 /// One contact's geometry for the chart.
 struct RingContact {
@@ -57,6 +75,24 @@ class RingChart {
   RingChart(int n, int spin, std::vector<RingContact> contacts);
 
   int contact_count() const { return static_cast<int>(c_.size()); }
+  /// Which coordinates the closed contacts of a mode tuple eliminate (built on the stack by
+  /// plan(): no allocation).
+  struct Plan {
+    bool ok = false;
+    std::array<Phase, RingAnchor::kMax> modes{};  ///< the modes planned for
+    int rows = 0;                                 ///< closed contacts on fixed rings
+    std::array<int, RingAnchor::kMax> row_k{};    ///< their contacts, in contact order
+    /// the rotor coordinates their x and y equations are solved for (row r's pivot: piv_x[r])
+    std::array<int, RingAnchor::kMax> piv_x{}, piv_y{};
+    /// every eliminated coordinate (closed contacts' sprung rings, the pivots), ascending
+    int n_elim = 0;
+    std::array<int, 2 * RingAnchor::kMax> elim{};
+  };
+  /// The plan of `modes` (ok = false where the chart does not apply). A caller that embeds
+  /// and reduces many states of one mode tuple (an integrator's right-hand side) computes it
+  /// once and passes it to embed and reduce.
+  void plan(std::span<const Phase> modes, Plan& pl) const;
+
   /// The closed contacts of `modes` can be charted together (see above).
   bool applies(std::span<const Phase> modes) const;
   /// The number of reduced coordinates for `modes`: n - (closed contacts) - (sticking ones).
@@ -70,18 +106,30 @@ class RingChart {
   /// p'' of a full acceleration a that satisfies the closed contacts' constraints at
   /// acceleration level, at the embedded state q.
   void reduce(std::span<const Phase> modes, VecIn q, VecIn a, VecOut pdd) const;
+  /// embed and reduce with the plan of these very modes (plan()).
+  void embed(std::span<const Phase> modes, const Plan& pl, const RingAnchor& anchor, VecIn p,
+             VecIn pd, VecOut q, VecOut v) const;
+  void reduce(std::span<const Phase> modes, const Plan& pl, VecIn q, VecIn a, VecOut pdd) const;
   /// Per reduced coordinate, the length an angle moves a contact point by per radian (0: a copy
   /// of a full coordinate; phi_k: g_k; theta - theta0 when a contact sticks: the largest R_k of
   /// the sticking contacts), as ChartScales::length in contact_chart.hpp.
   void lengths(std::span<const Phase> modes, std::span<double> L) const;
 
  private:
+  /// The pivots of the fixed rings' x (or y: use_y) equations; false if rank-deficient.
+  bool choose_pivots(const Plan& pl, bool use_y, std::array<int, RingAnchor::kMax>& piv) const;
+  /// Solves the fixed rings' equations for their pivots: q (positions: rhs_k = g_k cos phi_k or
+  /// g_k sin phi_k) or v (rates: their time derivatives), the other coordinates already set.
+  void solve_rows(const Plan& pl, bool use_y, const double* rhs, VecOut x) const;
   /// sum_j w[j] q[idx[j]]: one coordinate of contact k's rotor point (idx: its ix or iy)
   double point(const std::array<int, 2>& idx, int k, VecIn q) const;
   double px(int k, VecIn q) const;
   double py(int k, VecIn q) const;
-  /// Coordinate i is a closed contact's ring coordinate (eliminated).
-  bool eliminated(std::span<const Phase> modes, int i) const;
+  /// The ring centre of contact k (the origin for a fixed ring), from q (or v, or a).
+  double sx(int k, VecIn q) const;
+  double sy(int k, VecIn q) const;
+  /// Coordinate i is a closed contact's sprung-ring coordinate.
+  bool ring_eliminated(std::span<const Phase> modes, int i) const;
   static bool any_stick(std::span<const Phase> modes);
 
   int n_, spin_;

@@ -20,8 +20,9 @@
 //            theta - theta0 in stick: R_r per radian), at the gap's scale.
 //            With several contacts (event_multi.cpp): the K-contact chart of
 //            contact/ring_chart.hpp (each closed contact's ring replaced by one angle, or tied
-//            to the spin in stick) wherever every closed contact has a sprung ring of its own;
-//            the projection formulation for the other phases.
+//            to the spin in stick; a fixed ring's two equations solved for two of the rotor's
+//            coordinates) wherever it applies; the projection formulation for the other
+//            phases (rank-deficient fixed rings, a shared ring, stick at a prescribed speed).
 //   projection: the index-reduced DAE in full coordinates, CVODE-BDF with projection after
 //            every step (positions onto d_N = 0, velocities onto v_N = 0 and v_t = 0 in stick,
 //            mass-weighted). Kept as an in-house cross-check; also the fallback for a model
