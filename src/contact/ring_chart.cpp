@@ -166,6 +166,11 @@ void RingChart::plan(std::span<const Phase> modes, Plan& pl) const {
     pl.elim[static_cast<std::size_t>(pl.n_elim++)] = pl.piv_y[static_cast<std::size_t>(r)];
   }
   std::sort(pl.elim.begin(), pl.elim.begin() + pl.n_elim);
+  // a coordinate eliminated twice (a model whose x and y coordinates of the rotor points
+  // overlap): not a chart
+  if (std::adjacent_find(pl.elim.begin(), pl.elim.begin() + pl.n_elim) !=
+      pl.elim.begin() + pl.n_elim)
+    return;
   pl.ok = true;
 }
 

@@ -224,6 +224,14 @@ TEST_CASE(
   const RingChart dependent(9, 4, prop);
   CHECK(dependent.applies(Modes{P::SlipPos, P::Free}));
   CHECK_FALSE(dependent.applies(Modes{P::SlipPos, P::Stick}));
+  // a fixed ring whose point's y is another fixed ring's x coordinate: one coordinate would be
+  // eliminated twice
+  std::vector<RingContact> crossed = {rc[2], rc[2]};
+  crossed[1].ix = {3, -1};
+  crossed[1].iy = {2, -1};
+  const RingChart cross(9, 4, crossed);
+  CHECK(cross.applies(Modes{P::SlipPos, P::Free}));
+  CHECK_FALSE(cross.applies(Modes{P::SlipPos, P::SlipPos}));
   // a ring shared by two contacts (a split of one body's constraint): not when both are closed
   std::vector<RingContact> shared = {rc[0], rc[1]};
   shared[1].ring = 5;
