@@ -34,16 +34,16 @@ EventDrivenOptions options(double rtol, double output_dt) {
   return o;
 }
 
-/// cases/two-plane.toml with `overrides`, run over 30 ms at rtol in both formulations of the
-/// contact phases: `reduced` (the default: the K-contact chart) and `projection`.
+/// cases/two-plane.toml (with plane 1's and/or plane 2's ring fixed: support/fixed_rings.hpp)
+/// with `overrides`, run over 30 ms at rtol in both formulations of the contact phases:
+/// `reduced` (the default: the K-contact chart) and `projection`.
 struct BothFormulations {
   MemorySink reduced_sink, projection_sink;
   RunSummary reduced, projection;
-  BothFormulations(const std::vector<std::string>& overrides, double rtol)
-      : BothFormulations(load_case(RUBDYN_SOURCE_DIR "/cases/two-plane.toml", overrides), rtol, 0) {
-  }
-  /// Another case (the int only tells the constructors apart).
-  BothFormulations(const CaseSpec& c, double rtol, int) {
+  BothFormulations(bool fixed1, bool fixed2, const std::vector<std::string>& overrides,
+                   double rtol) {
+    const CaseSpec c = parse_case(rubdyn::testing::two_plane_fixed_rings_text(fixed1, fixed2),
+                                  "two-plane.toml", overrides);
     const auto m = build_model(c);
     EventDrivenOptions proj = options(rtol, 1e-4);
     proj.contact_phases = ContactFormulation::Projection;
@@ -338,26 +338,40 @@ TEST_CASE("Event-driven with K contacts: contact phases in minimal coordinates (
           "[events][multi]") {
   // cases/two-plane.toml has a sprung ring per plane: its contact phases run in the chart of
   // contact/ring_chart.hpp (the summary says "reduced"), where the constraints hold by
-  // construction. The projection formulation of the same run is an independent integration of
-  // the same equations: they agree to the integrators' accuracy.
-  const BothFormulations both({}, 1e-12);
-  const RunSummary &ra = both.reduced, &rb = both.projection;
-  const MemorySink &a = both.reduced_sink, &b = both.projection_sink;
-  REQUIRE(ra.complete());
-  REQUIRE(rb.complete());
-  CHECK(ra.options.find("reduced+adams") != std::string::npos);
-  CHECK(rb.options.find("bdf+projection") != std::string::npos);
-  // on the constraint to round-off (|P - S| = g formed from coordinates of 1e-4 m: ulps of
-  // 1e-4 m are 1e-20 m); the projection stops at its own tolerance
-  INFO("drift reduced " << ra.max_drift_position << " m, projection " << rb.max_drift_position);
-  CHECK(ra.max_drift_position < 1e-18);
-  int compared = 0;
-  const double dq = rotor_grid_diff(a, b, 1e-4, compared);
-  CHECK(compared >= 290);
-  // measured 6.6e-14 m on the output grid (the projection's own self-convergence at rtol 1e-12,
-  // the tighter of the two: a few 1e-14 m); 1e-12 m is a margin of 15
-  INFO("reduced vs projection at rtol 1e-12: " << dq << " m");
-  CHECK(dq < 1e-12);
+  // construction; then with plane 2's ring fixed, and with both fixed (the chart solves the
+  // fixed rings' equations for rotor coordinates: ring_chart.hpp, FIXED RING). The projection
+  // formulation of the same run is an independent integration of the same equations: they
+  // agree to the integrators' accuracy.
+  struct Scene {
+    const char* name;
+    bool fixed1, fixed2;
+  };
+  for (const Scene& sc :
+       {Scene{"sprung rings", false, false}, Scene{"plane 2's ring fixed", false, true},
+        Scene{"both rings fixed", true, true}}) {
+    INFO(sc.name);
+    const BothFormulations both(sc.fixed1, sc.fixed2, {}, 1e-12);
+    const RunSummary &ra = both.reduced, &rb = both.projection;
+    REQUIRE(ra.complete());
+    REQUIRE(rb.complete());
+    // the reduced formulation is on; that its phases ran in the chart shows in the drift
+    CHECK(ra.options.find("reduced+adams") != std::string::npos);
+    CHECK(rb.options.find("bdf+projection") != std::string::npos);
+    CHECK(ra.phase_time[static_cast<int>(Phase::Free)] < 0.029);  // it does rub
+    // on the constraints to round-off (|P - S| = g, or |P| = g on a fixed ring, formed from
+    // coordinates of 1e-4 m: ulps of 1e-4 m are 1e-20 m); the projection stops at its own
+    // tolerance (measured 2e-18 m)
+    INFO("drift reduced " << ra.max_drift_position << " m, projection " << rb.max_drift_position);
+    CHECK(ra.max_drift_position < 1e-18);
+    int compared = 0;
+    const double dq = rotor_grid_diff(both.reduced_sink, both.projection_sink, 1e-4, compared);
+    CHECK(compared >= 290);
+    // measured on the output grid: 6.6e-14 m (sprung), 1.2e-13 m (plane 2 fixed), 7.2e-14 m
+    // (both fixed), the projection's own self-convergence at rtol 1e-12 (the tighter of the
+    // two: a few 1e-14 m); 1e-12 m is a margin of 8 or more
+    INFO("reduced vs projection at rtol 1e-12: " << dq << " m");
+    CHECK(dq < 1e-12);
+  }
 }
 
 TEST_CASE("Event-driven with K contacts: rolling at both planes in minimal coordinates",
@@ -379,12 +393,7 @@ TEST_CASE("Event-driven with K contacts: rolling at both planes in minimal coord
   for (const Scene& sc : {Scene{"sprung rings", false, 0.003}, Scene{"fixed rings", true, 0.01}}) {
     INFO(sc.name);
     const std::vector<std::string> mu = {"plane.1.mu=0.5", "plane.2.mu=0.5"};
-    const BothFormulations both =
-        sc.fixed
-            ? BothFormulations(parse_case(rubdyn::testing::two_plane_fixed_rings_text(true, true),
-                                          "two-plane.toml", mu),
-                               1e-10, 0)
-            : BothFormulations(mu, 1e-10);
+    const BothFormulations both(sc.fixed, sc.fixed, mu, 1e-10);
     const RunSummary &ra = both.reduced, &rb = both.projection;
     REQUIRE(ra.complete());
     REQUIRE(rb.complete());
@@ -398,35 +407,5 @@ TEST_CASE("Event-driven with K contacts: rolling at both planes in minimal coord
     CHECK(std::abs(ra.energy_residual) < 1e-8 * flows);
     CHECK(std::abs(rb.energy_residual) > 1e-8 * flows);
     CHECK(ra.max_drift_position < 1e-18);
-  }
-}
-
-TEST_CASE("Event-driven with K contacts: minimal coordinates on fixed rings", "[events][multi]") {
-  // cases/two-plane.toml with plane 2's ring fixed, then both rings fixed: the chart solves the
-  // fixed rings' equations for rotor coordinates (ring_chart.hpp, FIXED RING). Against the
-  // projection formulation of the same runs, and on the constraints to round-off.
-  for (const bool both_fixed : {false, true}) {
-    INFO((both_fixed ? "both rings fixed" : "plane 2's ring fixed"));
-    const BothFormulations both(
-        parse_case(rubdyn::testing::two_plane_fixed_rings_text(both_fixed, true), "two-plane.toml"),
-        1e-12, 0);
-    const RunSummary &ra = both.reduced, &rb = both.projection;
-    REQUIRE(ra.complete());
-    REQUIRE(rb.complete());
-    // the reduced formulation is on; that its phases ran in the chart shows in the drift
-    CHECK(ra.options.find("reduced+adams") != std::string::npos);
-    INFO("drift reduced " << ra.max_drift_position << " m, projection " << rb.max_drift_position
-                          << " m; contact time "
-                          << 0.03 - ra.phase_time[static_cast<int>(Phase::Free)] << " s");
-    CHECK(ra.phase_time[static_cast<int>(Phase::Free)] < 0.029);  // it does rub
-    // |P| = g (fixed) and |P - S| = g (sprung) by construction: ulps of 1e-4 m, 1e-20 m each
-    CHECK(ra.max_drift_position < 1e-18);
-    int compared = 0;
-    const double dq = rotor_grid_diff(both.reduced_sink, both.projection_sink, 1e-4, compared);
-    CHECK(compared >= 290);
-    // measured 7.2e-14 m (plane 2 fixed) and 1.2e-13 m (both fixed), as on sprung rings (the
-    // projection's own accuracy at rtol 1e-12); 1e-12 m is a margin of 8
-    INFO("reduced vs projection at rtol 1e-12: " << dq << " m");
-    CHECK(dq < 1e-12);
   }
 }
