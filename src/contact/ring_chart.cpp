@@ -230,7 +230,12 @@ void RingChart::chart(std::span<const Phase> modes, VecIn q, VecIn v, RingAnchor
                       VecOut pd) const {
   Plan pl;
   plan(modes, pl);
-  RUBDYN_DEMAND(pl.ok);
+  chart(modes, pl, q, v, anchor, p, pd);
+}
+
+void RingChart::chart(std::span<const Phase> modes, const Plan& pl, VecIn q, VecIn v,
+                      RingAnchor& anchor, VecOut p, VecOut pd) const {
+  RUBDYN_DEMAND(pl.ok && std::equal(modes.begin(), modes.end(), pl.modes.begin()));
   const bool stick = any_stick(modes);
   anchor.theta0 = stick ? q[spin_] : 0.0;
   int j = 0;
@@ -361,7 +366,11 @@ void RingChart::reduce(std::span<const Phase> modes, const Plan& pl, VecIn q, Ve
 void RingChart::lengths(std::span<const Phase> modes, std::span<double> L) const {
   Plan pl;
   plan(modes, pl);
-  RUBDYN_DEMAND(pl.ok);
+  lengths(modes, pl, L);
+}
+
+void RingChart::lengths(std::span<const Phase> modes, const Plan& pl, std::span<double> L) const {
+  RUBDYN_DEMAND(pl.ok && std::equal(modes.begin(), modes.end(), pl.modes.begin()));
   const bool stick = any_stick(modes);
   double R = 0.0;
   for (int k = 0; k < contact_count(); ++k)

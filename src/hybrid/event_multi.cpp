@@ -304,14 +304,14 @@ class MultiSystem {
     if (contact_) place(t, q, v);
     if (chart_) {
       chart_->plan(sh_.modes, plan_);  // the modes' eliminations, for every rhs of the phase
-      chart_->chart(sh_.modes, q, v, anchor_, p_, pd_);
+      chart_->chart(sh_.modes, plan_, q, v, anchor_, p_, pd_);
       chart_->embed(sh_.modes, plan_, anchor_, p_, pd_, q, v);
       VMap(ys_.data(), dim_) = p_;
       VMap(ys_.data() + dim_, dim_) = pd_;
       // error weights of this mode tuple's coordinates: a copied coordinate rtol |p| + atol_q,
       // an angle by the displacement it causes, (rtol g0 + atol_q) / L (phase_system.cpp's
       // rule); rates rtol |p'| + atol_v; works rtol |W| + 1e-9 J
-      chart_->lengths(sh_.modes, lengths_);
+      chart_->lengths(sh_.modes, plan_, lengths_);
       for (int i = 0; i < dim_; ++i) {
         const double L = lengths_[static_cast<std::size_t>(i)];
         rtol_[static_cast<std::size_t>(i)] = L > 0.0 ? 0.0 : settings_.rtol;

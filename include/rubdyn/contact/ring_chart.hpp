@@ -106,14 +106,18 @@ class RingChart {
   /// p'' of a full acceleration a that satisfies the closed contacts' constraints at
   /// acceleration level, at the embedded state q.
   void reduce(std::span<const Phase> modes, VecIn q, VecIn a, VecOut pdd) const;
-  /// embed and reduce with the plan of these very modes (plan()).
-  void embed(std::span<const Phase> modes, const Plan& pl, const RingAnchor& anchor, VecIn p,
-             VecIn pd, VecOut q, VecOut v) const;
-  void reduce(std::span<const Phase> modes, const Plan& pl, VecIn q, VecIn a, VecOut pdd) const;
+
   /// Per reduced coordinate, the length an angle moves a contact point by per radian (0: a copy
   /// of a full coordinate; phi_k: g_k; theta - theta0 when a contact sticks: the largest R_k of
   /// the sticking contacts), as ChartScales::length in contact_chart.hpp.
   void lengths(std::span<const Phase> modes, std::span<double> L) const;
+  /// The same four with the plan of these very modes (plan(); checked against them).
+  void chart(std::span<const Phase> modes, const Plan& pl, VecIn q, VecIn v, RingAnchor& anchor,
+             VecOut p, VecOut pd) const;
+  void embed(std::span<const Phase> modes, const Plan& pl, const RingAnchor& anchor, VecIn p,
+             VecIn pd, VecOut q, VecOut v) const;
+  void reduce(std::span<const Phase> modes, const Plan& pl, VecIn q, VecIn a, VecOut pdd) const;
+  void lengths(std::span<const Phase> modes, const Plan& pl, std::span<double> L) const;
 
  private:
   /// The pivots of the fixed rings' x (or y: use_y) equations; false if rank-deficient.
