@@ -32,6 +32,7 @@ Usage: validation/siconos/run.py [path/to/rubdyn] [--quick] [--short] [--full-au
                 on this machine when it is busy)
 Needs python3-siconos: scripts/install-deps.sh --peer
 """
+import contextlib
 import os
 import subprocess
 import sys
@@ -86,24 +87,31 @@ def same_rows(a, b):
         and x[4] == y[4] for x, y in zip(a, b))
 
 
-def run_siconos(p, h, t_end, projected, frozen, cs, log):
-    """The audited Siconos run with contact solver cs; returns (rows, info) with info["audit"]
-    the LawAudit. Siconos' own messages go to the file log."""
-    solver, tol, _ = CONTACT_SOLVERS[cs]
+@contextlib.contextmanager
+def messages_to(path):
+    """Siconos' C++ messages (file descriptors 1 and 2) written to the file path inside the
+    block, the terminal's restored after it (also run_planes.py)."""
     sys.stdout.flush()
     sys.stderr.flush()
     saved = [os.dup(1), os.dup(2)]
-    with open(log, "w") as f:
+    with open(path, "w") as f:
         os.dup2(f.fileno(), 1)
         os.dup2(f.fileno(), 2)
         try:
-            rows, _, info = model.simulate(p, h, t_end, projected=projected, dt_out=DT,
-                                           frozen=frozen, solver=solver, solver_tol=tol,
-                                           audit=True)
+            yield
         finally:
             for fd, s in zip((1, 2), saved):
                 os.dup2(s, fd)
                 os.close(s)
+
+
+def run_siconos(p, h, t_end, projected, frozen, cs, log):
+    """The audited Siconos run with contact solver cs; returns (rows, info) with info["audit"]
+    the LawAudit. Siconos' own messages go to the file log."""
+    solver, tol, _ = CONTACT_SOLVERS[cs]
+    with messages_to(log):
+        rows, _, info = model.simulate(p, h, t_end, projected=projected, dt_out=DT,
+                                       frozen=frozen, solver=solver, solver_tol=tol, audit=True)
     return rows, info
 
 

@@ -39,7 +39,7 @@ except ImportError:
                      "scripts/install-deps.sh --peer (Debian package python3-siconos)\n")
     sys.exit(2)
 import model_planes  # noqa: E402
-from run import hstr, siconos_version  # noqa: E402
+from run import hstr, messages_to, siconos_version  # noqa: E402
 
 RUBDYN, QUICK, OUT = script_args("siconos-planes")
 CASE = os.path.join(ROOT, "cases", "two-plane.toml")
@@ -87,18 +87,8 @@ def siconos_run(path, *args, **kw):
     path; returns simulate's result and the counts of the messages that report a failed contact
     solve ("output message from numerics solver is equal to 1") and a Newton loop that reached
     its iteration limit."""
-    sys.stdout.flush()
-    sys.stderr.flush()
-    saved = [os.dup(1), os.dup(2)]
-    with open(path, "w") as log:
-        os.dup2(log.fileno(), 1)
-        os.dup2(log.fileno(), 2)
-        try:
-            out = model_planes.simulate(*args, **kw)
-        finally:
-            for fd, s in zip((1, 2), saved):
-                os.dup2(s, fd)
-                os.close(s)
+    with messages_to(path):
+        out = model_planes.simulate(*args, **kw)
     with open(path) as log:
         text = log.read()
     return out, text.count("numerics solver is equal to 1"), text.count("max. number of iter")
