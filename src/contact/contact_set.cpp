@@ -409,13 +409,16 @@ EnumResult ContactSetSolver::EnumWork::run(MatIn W, VecIn u0, std::span<const Se
   }
   // tie rule 1, contact by contact in index order: contact i's excluded mode is dropped while a
   // consistent combination with contact i in another mode remains
-  for (int i = 0; i < K; ++i) {
-    if (!c[i].excluded) continue;
-    const Phase ex = *c[i].excluded;
+  auto drop = [&](int i, Phase ex) {
     bool other = false;
     for (int k = 0; k < n; ++k) other |= cand[k].alive && cand[k].mode[i] != ex;
     if (other)
       for (int k = 0; k < n; ++k) cand[k].alive &= cand[k].mode[i] != ex;
+  };
+  for (int i = 0; i < K; ++i) {
+    if (c[i].excluded) drop(i, *c[i].excluded);
+    for (int p = 0; p < kNumPhases; ++p)
+      if (c[i].excluded_modes & (1u << p)) drop(i, static_cast<Phase>(p));
   }
   // tie rules 2-3
   int pick_strict = -1, pick_boundary = -1;
@@ -636,7 +639,7 @@ SetOutcome ContactSetSolver::solve_guess(MatIn W, VecIn u0, std::span<const SetC
     const SetContact& ci = contacts[static_cast<std::size_t>(i)];
     const Phase g = guess[static_cast<std::size_t>(i)];
     // the guess must be one of the contact's candidates (contact_set.hpp, ENUMERATION)
-    eligible = !ci.excluded && ci.mu >= 0.0 &&
+    eligible = !ci.excludes_any() && ci.mu >= 0.0 &&
                (g == Phase::Free || (ci.mu == 0.0 ? g == Phase::SlipPos : true));
   }
   if (eligible && (known_unique ? *known_unique : unique_by_monotonicity(W, contacts))) {

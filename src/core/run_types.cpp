@@ -42,6 +42,7 @@ std::string_view to_string(Termination t) {
     case Termination::OutputFailure: return "output_failure";
     case Termination::StepCollapse: return "step_collapse";
     case Termination::Implausible: return "implausible";
+    case Termination::LawViolation: return "law_violation";
   }
   return "?";
 }

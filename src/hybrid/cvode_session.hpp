@@ -54,8 +54,6 @@ class CvodeSession {
   /// the callbacks have one, and an initial step (0: CVODE's estimate). Counters accumulate.
   void restart(double t0, const double* y0, int n_roots, const int* directions, bool projection,
                double h_init, double t_stop);
-  /// Changes the witnesses without restarting (same state, same history).
-  void set_roots(int n_roots, const int* directions);
   /// Replaces the per-component tolerances (n entries each; copied, nothing allocated): a
   /// session reused for states whose components mean different things (the K-contact charts),
   /// before its restart.
@@ -77,6 +75,13 @@ class CvodeSession {
   std::string last_error() const { return last_error_; }
 
  private:
+  /// Sets the witnesses (CVodeRootInit): only at a restart, where CVODE evaluates them at t0
+  /// before its first step. Called between steps, CVODE would compare their next values with
+  /// the values at the last step end, which it never computed for new witnesses (uninitialised
+  /// memory: measured with valgrind on the K-contact scenes, a source of runs that differed
+  /// between processes). The witnesses of a phase therefore stay the same from its restart to
+  /// the next; what changes between steps is only how the engine evaluates some of them.
+  void set_roots(int n_roots, const int* directions);
   struct Impl;
   std::unique_ptr<Impl> impl_;
   std::string last_error_;

@@ -40,7 +40,8 @@
 // and a margin falls between the two (never in the tests' 20000 random problems).
 //   1. Contact by contact in index order: the combinations with contact i in its `excluded`
 //      mode are dropped while a consistent combination with contact i in another mode remains
-//      (for decoupled contacts: each contact's own rule 1).
+//      (for decoupled contacts: each contact's own rule 1); then, the same way, each mode of its
+//      `excluded_modes`, one after the other.
 //   2. The first Strict combination, else the first Boundary one, in the order of least contact
 //      effort: fewest closed contacts (not free), then fewest slipping contacts with mu > 0
 //      (dissipating ones), then contact 0's mode first, contact 1's next, ... in the order free,
@@ -85,6 +86,11 @@ struct SetContact {
   double mu = 0.0;                ///< Coulomb coefficient, >= 0
   int sliding = 0;                ///< 0, or +-1: slides in that direction (acceleration level)
   std::optional<Phase> excluded;  ///< tie rule 1
+  /// More modes dropped by tie rule 1 after `excluded`, in the order free, stick, slip+, slip-
+  /// (bit 1 << Phase): the event-driven engine's modes whose margin, zero at an event, falls
+  /// (decided by the next order, contact_decisions.hpp).
+  std::uint8_t excluded_modes = 0;
+  bool excludes_any() const { return excluded.has_value() || excluded_modes != 0; }
 };
 
 enum class SetOutcome : int {

@@ -20,6 +20,11 @@ enum class Phase : int { Free = 0, SlipPos = 1, SlipNeg = 2, Stick = 3 };
 inline constexpr int kNumPhases = 4;
 std::string_view to_string(Phase p);
 
+/// The largest number of contacts of a model (rub planes, contact nodes): every solver, chart
+/// and case table takes up to this many (the event-driven engine keeps sets of contacts as bit
+/// masks and sizes its fixed workspaces by it).
+inline constexpr int kMaxContacts = 8;
+
 /// Kinds of events logged by the solvers.
 enum class EventKind : int {
   Impact = 0,  ///< contact onset with v_N < 0, impact map applied
@@ -55,6 +60,10 @@ enum class Termination : int {
   /// (the event solver's penetration beyond round-off of the gap, an energy residual as large
   /// as the energy flows)
   Implausible,
+  /// The contact law broke beyond round-off at a sample or an event: a normal force below 0 or a
+  /// friction force outside the Coulomb cone (the event-driven solver checks every contact at
+  /// every sample and event; a reference must satisfy the law it claims)
+  LawViolation,
 };
 std::string_view to_string(Termination t);
 

@@ -1,0 +1,43 @@
+#pragma once
+// Minimal coordinates of contact phases, as the engine sees them: one interface over the
+// model's charts. One contact: the model's ContactChart (contact/contact_chart.hpp: slip
+// eliminates the rotor's point, stick ties it to the spin); several: the RingChart
+// (contact/ring_chart.hpp: each closed contact's ring replaced by one angle, or tied to the spin
+// in stick; fixed rings eliminate rotor coordinates). A session of the engine integrates every
+// mode tuple whose chart has its dimension; its PhaseChart keeps what the running phase's chart
+// needs (the anchor where it began, the plan of its eliminations). Nothing here allocates
+// after construction.
+#include <memory>
+#include <span>
+
+#include "contact_modes.hpp"
+#include "rubdyn/model/lagrangian_model.hpp"
+
+namespace rubdyn::detail {
+
+class PhaseChart {
+ public:
+  virtual ~PhaseChart() = default;
+  /// The closed contacts of `modes` can be charted together.
+  virtual bool applies(const Modes& modes) const = 0;
+  /// The number of reduced coordinates of `modes` (applies(modes)).
+  virtual int dim(const Modes& modes) const = 0;
+  /// Begins a phase of `modes` at a state (q, v) on its constraints: its reduced coordinates
+  /// p, p' (size dim) and, per reduced coordinate, the length an angle moves a contact point by
+  /// per radian (0: a copy of a full coordinate), which weights its error.
+  virtual void enter(const Modes& modes, VecIn q, VecIn v, VecOut p, VecOut pd,
+                     std::span<double> lengths) = 0;
+  /// The full state of reduced coordinates of the phase begun last.
+  virtual void embed(VecIn p, VecIn pd, VecOut q, VecOut v) const = 0;
+  /// p'' of a full acceleration a that satisfies the constraints at acceleration level, at the
+  /// embedded state q.
+  virtual void reduce(VecIn p, VecIn pd, VecIn q, VecIn a, VecOut pdd) const = 0;
+  /// A chart of its own for another session (each keeps its phase's anchor).
+  virtual std::unique_ptr<PhaseChart> clone() const = 0;
+};
+
+/// The chart of a model's contact phases: its ContactChart with one contact, its RingChart
+/// (covering every contact) otherwise; null when it has none (the projection formulation).
+std::unique_ptr<PhaseChart> make_phase_chart(const LagrangianModel& m);
+
+}  // namespace rubdyn::detail

@@ -1,0 +1,336 @@
+#include "phase_session.hpp"
+
+#include <algorithm>
+
+#include "rubdyn/core/demand.hpp"
+
+namespace rubdyn::detail {
+
+const char* witness_name(Witness w) {
+  switch (w) {
+    case Witness::Gap: return "d_N";
+    case Witness::GapRate: return "v_N";
+    case Witness::NormalForce: return "F_N";
+    case Witness::SlipSpeed: return "v_t";
+    case Witness::ConeUpper: return "mu*F_N-F_T";
+    case Witness::ConeLower: return "mu*F_N+F_T";
+    case Witness::Omega: return "omega-omega_lim";
+  }
+  return "?";
+}
+
+namespace {
+
+using CMap = Eigen::Map<const Vec>;
+using VMap = Eigen::Map<Vec>;
+
+}  // namespace
+
+// ---- PhaseContext -----------------------------------------------------------------------------
+
+PhaseContext::PhaseContext(const LagrangianModel& model, double rtol, double atol,
+                           double omega_lim_)
+    : m(model), K(model.contact_count()), omega_lim(omega_lim_) {
+  modes.K = K;
+  for (int k = 0; k < K; ++k) {
+    laws.push_back(model.contact_law(k));
+    tol.push_back(SwitchTolerances::derive(rtol, atol, model.gap_scale(k)));
+  }
+}
+
+double PhaseContext::witness_value(const WitnessRef& w, const PhaseEval& e, double t, VecIn q,
+                                   VecIn v) const {
+  if (w.w == Witness::Omega) return arming.omega_done ? omega_lim : m.spin(t, q, v) - omega_lim;
+  const int k = w.k;
+  const ContactKinematics& c = e.c(k);
+  const SwitchTolerances& tk = tl(k);
+  const double mu = law(k).mu;
+  switch (w.w) {
+    case Witness::Gap: return c.d_N + (arming.gap_banded.test(k) ? tk.graze_tol : 0.0);
+    case Witness::GapRate: return arming.rate_deferred.test(k) ? tk.v_ref : c.v_N;
+    case Witness::NormalForce: return e.F_N(k);
+    case Witness::SlipSpeed:
+      return c.v_t + (arming.slip_banded.test(k) ? slip_sign(modes[k]) * tk.v_tol : 0.0);
+    case Witness::ConeUpper: return mu * e.F_N(k) - e.F_T(k);
+    case Witness::ConeLower: return mu * e.F_N(k) + e.F_T(k);
+    case Witness::Omega: break;
+  }
+  return 0.0;
+}
+
+// ---- PhaseSession -----------------------------------------------------------------------------
+
+PhaseSession::PhaseSession(const PhaseContext& ctx, const SessionSettings& s, SessionKind kind,
+                           std::unique_ptr<PhaseChart> chart, int dim)
+    : ctx_(ctx),
+      m_(ctx.m),
+      n_(ctx.m.num_dofs()),
+      K_(ctx.K),
+      kind_(kind),
+      rheonomic_(ctx.m.rheonomic()),
+      chart_(kind == SessionKind::Reduced ? std::move(chart) : nullptr),
+      dim_(kind == SessionKind::Reduced ? dim : ctx.m.num_dofs()),
+      settings_(s),
+      rhs_(ctx.m, ctx.K),
+      proj_(ctx.m, ctx.K),
+      roots_(ctx.m, ctx.K),
+      query_(ctx.m, ctx.K),
+      q_rhs_(Vec::Zero(n_)),
+      v_rhs_(Vec::Zero(n_)),
+      q_proj_(Vec::Zero(n_)),
+      v_proj_(Vec::Zero(n_)),
+      q_roots_(Vec::Zero(n_)),
+      v_roots_(Vec::Zero(n_)),
+      forces_(static_cast<std::size_t>(K_)),
+      p_(Vec::Zero(dim_)),
+      pd_(Vec::Zero(dim_)),
+      lengths_(static_cast<std::size_t>(dim_), 0.0) {
+  RUBDYN_DEMAND(kind != SessionKind::Reduced || chart_ != nullptr);
+  // Error weights of a session state (p, p', works) with dim coordinates: a coordinate that is a
+  // full one has rtol |p| + atol_q; an angle of a chart is weighted at each restart (restart());
+  // rates rtol |p'| + atol_v; works rtol |W| + 1e-9 J.
+  const int N = 2 * dim_ + kNw;
+  rtol_.assign(static_cast<std::size_t>(N), s.rtol);
+  atol_.assign(static_cast<std::size_t>(N), 1e-9);
+  for (int i = 0; i < dim_; ++i) {
+    atol_[static_cast<std::size_t>(i)] = s.atol_q;
+    atol_[static_cast<std::size_t>(dim_ + i)] = s.atol_v;
+  }
+  ys_.assign(static_cast<std::size_t>(N), 0.0);
+  scratch_.assign(static_cast<std::size_t>(N), 0.0);
+  CvodeConfig c;
+  c.n = N;
+  const bool adams = s.adams && kind != SessionKind::Projected;
+  c.method = adams ? CvodeMethod::Adams : CvodeMethod::BDF;
+  c.fixed_point = adams && s.fixed_point;
+  c.rtol = rtol_.data();
+  c.atol = atol_.data();
+  c.max_steps = s.max_steps;
+  CvodeCallbacks cb;
+  switch (kind) {
+    case SessionKind::Free:
+      cb.rhs = &PhaseSession::rhs_free;
+      if (!c.fixed_point) {
+        cb.jac = &PhaseSession::jac_free;
+        M_.setZero(n_, n_);
+        dfdq_.setZero(n_, n_);
+        dfdv_.setZero(n_, n_);
+        dMa_.setZero(n_, n_);
+        f_.setZero(n_);
+        a_.setZero(n_);
+        ldlt_ = Eigen::LDLT<Mat>(n_);
+      }
+      break;
+    case SessionKind::Projected:
+      cb.rhs = &PhaseSession::rhs_projected;
+      cb.proj = &PhaseSession::proj;
+      break;
+    case SessionKind::Reduced: cb.rhs = &PhaseSession::rhs_reduced; break;
+  }
+  cb.roots = &PhaseSession::roots;
+  cb.user = this;
+  session_ = std::make_unique<CvodeSession>(c, cb);
+}
+
+void PhaseSession::to_full(const double* y, Vec& q, Vec& v) const {
+  if (chart_) {
+    chart_->embed(CMap(y, dim_), CMap(y + dim_, dim_), q, v);
+  } else {
+    q = CMap(y, n_);
+    v = CMap(y + n_, n_);
+  }
+}
+
+void PhaseSession::restart(double t, Vec& q, Vec& v, const Works& w, double t_stop) {
+  if (kind_ == SessionKind::Projected) query_.place(t, q, v, ctx_.modes, ctx_.laws, ctx_.tol);
+  if (chart_) {
+    chart_->enter(ctx_.modes, q, v, p_, pd_, lengths_);
+    chart_->embed(p_, pd_, q, v);
+    VMap(ys_.data(), dim_) = p_;
+    VMap(ys_.data() + dim_, dim_) = pd_;
+    // error weights of this phase's coordinates: a copied coordinate rtol |p| + atol_q; an
+    // angle that moves a contact point by L per radian by the displacement it causes,
+    // absolutely, at the gap's scale: (rtol g0 + atol_q) / L (contact_chart.hpp)
+    for (int i = 0; i < dim_; ++i) {
+      const double L = lengths_[static_cast<std::size_t>(i)];
+      rtol_[static_cast<std::size_t>(i)] = L > 0.0 ? 0.0 : settings_.rtol;
+      atol_[static_cast<std::size_t>(i)] =
+          L > 0.0 ? (settings_.rtol * settings_.g0 + settings_.atol_q) / L : settings_.atol_q;
+    }
+    session_->set_tolerances(rtol_.data(), atol_.data());
+  } else {
+    VMap(ys_.data(), n_) = q;
+    VMap(ys_.data() + n_, n_) = v;
+  }
+  std::copy(w.begin(), w.end(), ys_.begin() + 2 * dim_);
+  session_->restart(t, ys_.data(), ctx_.witnesses.size(), ctx_.witnesses.dirs.data(),
+                    kind_ == SessionKind::Projected, 0.0, t_stop);
+}
+
+CvodeSession::Status PhaseSession::advance(double tout, double& t, Vec& q, Vec& v, bool one_step) {
+  const CvodeSession::Status st = session_->advance(tout, t, ys_.data(), one_step);
+  to_full(ys_.data(), q, v);
+  return st;
+}
+
+void PhaseSession::interpolate(double t, Vec& q, Vec& v) const {
+  session_->dky(t, 0, scratch_.data());
+  to_full(scratch_.data(), q, v);
+  if (kind_ == SessionKind::Projected) query_.place(t, q, v, ctx_.modes, ctx_.laws, ctx_.tol);
+}
+
+Works PhaseSession::works() const {
+  Works w{};
+  std::copy_n(ys_.begin() + 2 * dim_, kNw, w.begin());
+  return w;
+}
+
+Works PhaseSession::works_at(double t) const {
+  session_->dky(t, 0, scratch_.data());
+  Works w{};
+  std::copy_n(scratch_.begin() + 2 * dim_, kNw, w.begin());
+  return w;
+}
+
+bool PhaseSession::evaluate(double t, Vec& q, Vec& v) const {
+  if (kind_ == SessionKind::Projected)
+    return query_.place(t, q, v, ctx_.modes, ctx_.laws, ctx_.tol);
+  return query_.dynamics(t, q, v, ctx_.modes, ctx_.laws);
+}
+
+void PhaseSession::evaluate_witnesses(double t, Vec& q, Vec& v) const {
+  if (kind_ == SessionKind::Free) {
+    query_.kinematics(t, q, v);
+    return;
+  }
+  evaluate(t, q, v);
+}
+
+void PhaseSession::powers(double t, VecIn q, VecIn v, const PhaseEval& e, double* w) const {
+  const SmoothPower p = m_.smooth_power(t, q, v);
+  double friction = 0.0;
+  for (int k = 0; k < K_; ++k) {
+    forces_[static_cast<std::size_t>(k)] = {e.F_N(k), e.F_T(k)};
+    friction += e.F_T(k) * e.c(k).v_t;
+  }
+  w[0] = rheonomic_ ? m_.applied_power(t, q, v, e.a(), forces_.data()) : p.external;
+  w[1] = p.damping;
+  w[2] = friction;
+}
+
+int PhaseSession::rhs_free(double t, const double* y, double* yd, void* user) {
+  // Free flight needs only M and f: no contact quantities are built here. The acceleration is
+  // computed in place, in the rates of the velocities.
+  const auto* self = static_cast<const PhaseSession*>(user);
+  const int n = self->n_;
+  const CMap q(y, n), v(y + n, n);
+  VMap qd(yd, n), f(yd + n, n);
+  Eigen::Map<Mat> a(yd + n, n, 1);  // f, then M^{-1} f in place
+  qd = v;
+  self->m_.smooth_forces(t, q, v, f);
+  self->m_.solve_mass(q, a);
+  const SmoothPower p = self->m_.smooth_power(t, q, v);
+  if (self->rheonomic_) {
+    for (auto& F : self->forces_) F = {0.0, 0.0};
+    yd[2 * n] = self->m_.applied_power(t, q, v, a.col(0), self->forces_.data());
+  } else {
+    yd[2 * n] = p.external;
+  }
+  yd[2 * n + 1] = p.damping;
+  yd[2 * n + 2] = 0.0;
+  return all_finite(a) ? 0 : 1;
+}
+
+// Analytic Jacobian: d/dq (M^{-1} f) = M^{-1} (df/dq - d(M a)/dq), with a fixed.
+int PhaseSession::jac_free(double t, const double* y, const double*, double* J, void* user) {
+  auto* self = static_cast<PhaseSession*>(user);
+  const LagrangianModel& m = self->m_;
+  const int n = self->n_;
+  const CMap q(y, n), v(y + n, n);
+  m.mass_matrix(q, self->M_);
+  m.smooth_forces(t, q, v, self->f_);
+  m.smooth_force_jacobians(t, q, v, self->dfdq_, self->dfdv_);
+  self->ldlt_.compute(self->M_);
+  self->a_ = self->ldlt_.solve(self->f_);
+  m.mass_matrix_product_jacobian(q, self->a_, self->dMa_);
+  // column-major N x N, as SUNDIALS' dense matrix; the rows of the works are left 0 (they feed
+  // back into nothing, so Newton converges on them with the state)
+  const int N = 2 * n + kNw;
+  Eigen::Map<Mat> Jm(J, N, N);
+  Jm.setZero();
+  Jm.block(0, n, n, n).setIdentity();
+  self->dfdq_ -= self->dMa_;
+  Jm.block(n, 0, n, n) = self->ldlt_.solve(self->dfdq_);
+  Jm.block(n, n, n, n) = self->ldlt_.solve(self->dfdv_);
+  return 0;
+}
+
+int PhaseSession::rhs_projected(double t, const double* y, double* yd, void* user) {
+  const auto* self = static_cast<const PhaseSession*>(user);
+  const int n = self->n_;
+  const CMap q(y, n), v(y + n, n);
+  PhaseEval& e = self->rhs_;
+  if (!e.dynamics(t, q, v, self->ctx_.modes, self->ctx_.laws))
+    return 1;  // recoverable: CVODE retries with a smaller step
+  VMap(yd, n) = v;
+  VMap(yd + n, n) = e.a();
+  self->powers(t, q, v, e, yd + 2 * n);
+  return all_finite(e.a()) ? 0 : 1;
+}
+
+int PhaseSession::rhs_reduced(double t, const double* y, double* yd, void* user) {
+  // The constrained acceleration of the full model at the embedded state, reduced to p''
+  // (contact_chart.hpp, ring_chart.hpp).
+  const auto* self = static_cast<const PhaseSession*>(user);
+  const int d = self->dim_;
+  const CMap p(y, d), pd(y + d, d);
+  Vec& q = self->q_rhs_;
+  Vec& v = self->v_rhs_;
+  self->chart_->embed(p, pd, q, v);
+  PhaseEval& e = self->rhs_;
+  if (!e.dynamics(t, q, v, self->ctx_.modes, self->ctx_.laws))
+    return 1;  // recoverable: CVODE retries with a smaller step
+  VMap pdot(yd, d), pdd(yd + d, d);
+  pdot = pd;
+  self->chart_->reduce(p, pd, q, e.a(), pdd);
+  self->powers(t, q, v, e, yd + 2 * d);
+  return all_finite(pdd) ? 0 : 1;
+}
+
+int PhaseSession::proj(double t, const double* y, double* corr, void* user) {
+  const auto* self = static_cast<const PhaseSession*>(user);
+  const int n = self->n_;
+  Vec& q = self->q_proj_;
+  Vec& v = self->v_proj_;
+  q = CMap(y, n);
+  v = CMap(y + n, n);
+  self->proj_.place(t, q, v, self->ctx_.modes, self->ctx_.laws, self->ctx_.tol);
+  VMap(corr, n) = q - CMap(y, n);
+  VMap(corr + n, n) = v - CMap(y + n, n);
+  std::fill(corr + 2 * n, corr + 2 * n + kNw, 0.0);
+  return all_finite(q) && all_finite(v) ? 0 : -1;
+}
+
+int PhaseSession::roots(double t, const double* y, double* g, void* user) {
+  const auto* self = static_cast<const PhaseSession*>(user);
+  const PhaseContext& ctx = self->ctx_;
+  Vec& q = self->q_roots_;
+  Vec& v = self->v_roots_;
+  PhaseEval& e = self->roots_;
+  self->to_full(y, q, v);
+  // the witnesses of a contact phase are functions on its constraint manifold: a Reduced state
+  // is on it by construction, a Projected one is projected first
+  switch (self->kind_) {
+    case SessionKind::Free: e.kinematics(t, q, v); break;
+    case SessionKind::Reduced: e.dynamics(t, q, v, ctx.modes, ctx.laws); break;
+    case SessionKind::Projected: e.place(t, q, v, ctx.modes, ctx.laws, ctx.tol); break;
+  }
+  for (int i = 0; i < ctx.witnesses.size(); ++i) {
+    const WitnessRef& w = ctx.witnesses[i];
+    const SwitchTolerances& tl = ctx.tl(w.k < 0 ? 0 : w.k);
+    g[i] = ctx.witness_value(w, e, t, q, v) / witness_scale(w.w, tl, ctx.F_ref, ctx.omega_lim);
+  }
+  return 0;
+}
+
+}  // namespace rubdyn::detail

@@ -1,0 +1,139 @@
+#pragma once
+// The phases of the event-driven engine: one CVODE session (cvode_session.hpp, the only place
+// that touches SUNDIALS) per formulation, each with its own right-hand side, so that no
+// right-hand side branches on the formulation:
+//   Free       free flight in (q, v): a = M^{-1} f (one structured solve); Adams (fixed-point)
+//              or BDF with the analytic Jacobian
+//   Projected  the closed contacts' index-reduced DAE in (q, v): BDF, CVODE's projection after
+//              every step (positions onto d_N,k = 0, velocities mass-weighted onto v_N,k = 0 and
+//              v_t,k = 0 in stick)
+//   Reduced    a contact phase in minimal coordinates (phase_chart.hpp) of one dimension: every
+//              mode tuple whose chart has it; the constraints hold by construction
+// A session state is the mechanical part ((q, v) or (p, p')) followed by the kNw works of the
+// applied loads, the dampers and friction, integrated with the state and error-controlled like
+// it. The witnesses of the running phase (the engine's list, contact_modes.hpp) are evaluated
+// here, on the phase's own state. Every buffer is sized when the session is built; each
+// callback (right-hand side, Jacobian, projection, witnesses, the engine's queries) has its own
+// scratch, so that none overwrites another's.
+#include <Eigen/Cholesky>
+#include <array>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "contact_modes.hpp"
+#include "cvode_session.hpp"
+#include "phase_chart.hpp"
+#include "phase_eval.hpp"
+
+namespace rubdyn::detail {
+
+inline constexpr int kNw = 3;  // works: applied loads, dampers, friction
+using Works = std::array<double, kNw>;
+
+/// Tolerances and limits shared by the sessions.
+struct SessionSettings {
+  double rtol = 1e-10;
+  double atol_q = 1e-12;  ///< positions [m]
+  double atol_v = 1e-9;   ///< velocities [m/s]
+  double g0 = 1.0;        ///< the gap's scale [m] (angles of reduced coordinates)
+  bool adams = true;      ///< Adams (else BDF); a Projected session is always BDF
+  bool fixed_point = true;
+  long max_steps = 10'000'000;
+};
+
+/// What the sessions share with the engine: the contacts' modes, laws and tolerances, the
+/// witnesses of the running phase and how they are armed, the scales. Owned by the engine, read
+/// by every session's callbacks.
+struct PhaseContext {
+  PhaseContext(const LagrangianModel& m, double rtol, double atol, double omega_lim);
+  const LagrangianModel& m;
+  const int K;
+  Modes modes;
+  std::vector<ContactLaw> laws;
+  std::vector<SwitchTolerances> tol;
+  WitnessList witnesses;
+  Arming arming;
+  double F_ref = 1.0, omega_lim = 0.0;
+  const ContactLaw& law(int k) const { return laws[static_cast<std::size_t>(k)]; }
+  const SwitchTolerances& tl(int k) const { return tol[static_cast<std::size_t>(k)]; }
+  /// The value of a witness (unscaled) from an evaluation of the phase at (t, q, v).
+  double witness_value(const WitnessRef& w, const PhaseEval& e, double t, VecIn q, VecIn v) const;
+};
+
+enum class SessionKind { Free, Projected, Reduced };
+
+class PhaseSession {
+ public:
+  /// A Reduced session integrates the mode tuples whose chart has dimension `dim`.
+  PhaseSession(const PhaseContext& ctx, const SessionSettings& s, SessionKind kind,
+               std::unique_ptr<PhaseChart> chart = nullptr, int dim = 0);
+  PhaseSession(const PhaseSession&) = delete;
+  PhaseSession& operator=(const PhaseSession&) = delete;
+
+  SessionKind kind() const { return kind_; }
+  CvodeSession& session() { return *session_; }
+  const CvodeSession& session() const { return *session_; }
+  /// Start of the last internal step (the interpolant covers [step_start, current_time]).
+  double step_start() const { return session_->current_time() - session_->last_step(); }
+
+  /// (Re)starts at t from (q, v) with the works w, the context's modes and witnesses: a
+  /// Projected session projects (q, v) onto the constraints first, a Reduced one starts from
+  /// the chart of (q, v); (q, v) become the state it starts from (equal to the input to
+  /// round-off).
+  void restart(double t, Vec& q, Vec& v, const Works& w, double t_stop);
+  /// Advances (CvodeSession::advance) and returns the full state at t.
+  CvodeSession::Status advance(double tout, double& t, Vec& q, Vec& v, bool one_step);
+  /// The full state at t inside the last step (projected onto the constraints in a Projected
+  /// session, whose interpolant is not; on them by construction in a Reduced one).
+  void interpolate(double t, Vec& q, Vec& v) const;
+  /// Works at the last state advance returned, or interpolated at t in the last step.
+  Works works() const;
+  Works works_at(double t) const;
+
+  /// Evaluates the phase at a state of it (projected first in a Projected session): forces,
+  /// accelerations and kinematics in eval(). False: the closed set is singular.
+  bool evaluate(double t, Vec& q, Vec& v) const;
+  /// What the witnesses need: evaluate() in a contact phase; in free flight the contacts'
+  /// kinematics only (no solve with M; forces 0).
+  void evaluate_witnesses(double t, Vec& q, Vec& v) const;
+  const PhaseEval& eval() const { return query_; }
+  /// The unscaled value of a witness after evaluate() or evaluate_witnesses().
+  double witness_value(const WitnessRef& w, double t, const Vec& q, const Vec& v) const {
+    return ctx_.witness_value(w, query_, t, q, v);
+  }
+
+ private:
+  void to_full(const double* y, Vec& q, Vec& v) const;
+  void powers(double t, VecIn q, VecIn v, const PhaseEval& e, double* w) const;
+  static int rhs_free(double t, const double* y, double* yd, void* user);
+  static int jac_free(double t, const double* y, const double* yd, double* J, void* user);
+  static int rhs_projected(double t, const double* y, double* yd, void* user);
+  static int rhs_reduced(double t, const double* y, double* yd, void* user);
+  static int proj(double t, const double* y, double* corr, void* user);
+  static int roots(double t, const double* y, double* g, void* user);
+
+  const PhaseContext& ctx_;
+  const LagrangianModel& m_;
+  const int n_, K_;
+  const SessionKind kind_;
+  const bool rheonomic_;
+  std::unique_ptr<PhaseChart> chart_;  ///< Reduced: the chart of the running phase
+  const int dim_;                      ///< coordinates of the session state (n_ unless Reduced)
+  SessionSettings settings_;
+  // scratch of each callback: right-hand side, projection, witnesses, the engine's queries
+  mutable PhaseEval rhs_, proj_, roots_, query_;
+  mutable Vec q_rhs_, v_rhs_, q_proj_, v_proj_, q_roots_, v_roots_;
+  mutable std::vector<ContactForce> forces_;
+  Vec p_, pd_;
+  std::vector<double> lengths_;
+  std::vector<double> rtol_, atol_, ys_;
+  mutable std::vector<double> scratch_;
+  // free flight's Jacobian (BDF)
+  Mat M_, dfdq_, dfdv_, dMa_;
+  Vec f_, a_;
+  Eigen::LDLT<Mat> ldlt_;
+  std::unique_ptr<CvodeSession> session_;
+};
+
+}  // namespace rubdyn::detail
