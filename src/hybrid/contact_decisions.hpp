@@ -34,6 +34,7 @@
 // collapse_height (decision_tolerances.hpp: the integrator's position resolution), i.e. when
 // the push-off speed is below sqrt(2 |b_N| collapse_height); higher flights are integrated. A
 // bounce of an impact with restitution is truncated by the same criterion.
+#include <cmath>
 #include <optional>
 #include <string>
 #include <utility>
@@ -123,6 +124,19 @@ class ContactDecider {
   ModeSolve fd_ms_;
   ContactSetSolver solver_;
 };
+
+/// A sample or event obeys the contact law when no normal force is negative and no friction
+/// force leaves the Coulomb cone by more than kLawBreachRel of the contact forces' scale (the
+/// engine's F_ref: the largest normal force since the contacts closed). A decision takes a margin
+/// within its band as a zero (kWitnessBandRel of the force scale at a witness's event; the next
+/// order then drops a zero margin that falls), so a phase may begin with a margin that small on
+/// the wrong side, rising; beyond ten bands it is a broken law, not the decision's accuracy.
+/// Measured (validation/contacts/table.md): no sample or event of the K-contact scenes has a
+/// margin below 0 at all.
+inline constexpr double kLawBreachRel = 10.0 * kWitnessBandRel;
+inline bool law_holds(double F_N, double F_T, double mu, double scale) {
+  return F_N >= -kLawBreachRel * scale && std::abs(F_T) - mu * F_N <= kLawBreachRel * scale;
+}
 
 /// The record of a gap minimum at t with the contact's kinematics c there (kind grazing, phase
 /// free before; the caller sets what comes after).

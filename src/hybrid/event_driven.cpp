@@ -34,16 +34,6 @@ namespace {
 using namespace detail;
 using Status = CvodeSession::Status;
 
-/// The contact law at a sample or event holds to round-off when no force leaves the cone and
-/// no normal force is negative by more than this fraction of the run's contact-force scale
-/// (F_ref: the largest normal force seen since the contacts closed). Contact forces are solved
-/// from systems of at most 2K unknowns whose condition numbers stay below 1e7 in every scene of
-/// the tests (a Painleve-near slip is refused long before), so their round-off is below
-/// 1e7 eps ~ 2e-9 of the scale; the witnesses keep every margin >= 0 at the events they locate,
-/// and the next order rejects the decisions whose zero margins fall. Measured: no sample or event
-/// of the test suite's event runs has a margin below 0 beyond 1e-12 of the scale.
-constexpr double kLawBreachRel = 1e-9;
-
 class Engine {
  public:
   Engine(const LagrangianModel& m, const EventDrivenOptions& opt, OutputSink& sink)
@@ -226,8 +216,7 @@ class Engine {
   void check_law(double t, int k, double F_N, double F_T, const char* where) {
     if (!env_->summary().complete()) return;
     const double scale = std::max(ctx_.F_ref, kForceRefFloor);
-    const double excess = std::abs(F_T) - law(k).mu * F_N;
-    if (F_N >= -kLawBreachRel * scale && excess <= kLawBreachRel * scale) return;
+    if (law_holds(F_N, F_T, law(k).mu, scale)) return;
     fail(Termination::LawViolation,
          fmt::format("at t = {:.17g}, contact {} ({}): F_N = {:.6g} N, |F_T| = {:.6g} N, mu F_N = "
                      "{:.6g} N: the contact law is broken by more than {:.1g} of the contact "
