@@ -690,7 +690,7 @@ bool full_count(const std::string& x) {
 
 bool is_termination(const std::string& x) {
   if (x == "error" || x == "not_run") return true;
-  for (int k = 0; k <= static_cast<int>(Termination::OutputFailure); ++k)
+  for (int k = 0; k <= static_cast<int>(kLastTermination); ++k)
     if (x == to_string(static_cast<Termination>(k))) return true;
   return false;
 }

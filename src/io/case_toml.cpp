@@ -1085,11 +1085,7 @@ class Loader {
                        r.L));
       rule(pl.radius > 0, sec + "radius", pl.radius, "must be > 0 (the seal radius)");
       rule(pl.gap > 0, sec + "gap", pl.gap, "must be > 0 (the radial clearance g0)");
-      rule(pl.contact.mu >= 0, sec + "mu", pl.contact.mu, "must be >= 0 (a friction coefficient)");
-      rule(pl.contact.e_n >= 0 && pl.contact.e_n <= 1, sec + "e_n", pl.contact.e_n,
-           "must lie in [0, 1] (a restitution)");
-      rule(pl.contact.e_t >= 0 && pl.contact.e_t <= 1, sec + "e_t", pl.contact.e_t,
-           "must lie in [0, 1] (a restitution)");
+      law_rules(sec, pl.contact);
       if (!pl.rigid) {
         rule(pl.mass > 0, sec + "stator_mass", pl.mass, "must be > 0 (the ring's mass)");
         rule(pl.k > 0, sec + "stator_k", pl.k, "must be > 0 (the ring's support stiffness)");
@@ -1369,11 +1365,7 @@ class Loader {
       }
       rule(nd.at.radius > 0, sec + "radius", nd.at.radius, "must be > 0 (the seal radius)");
       rule(nd.at.gap > 0, sec + "gap", nd.at.gap, "must be > 0 (the radial clearance g0)");
-      rule(nd.law.mu >= 0, sec + "mu", nd.law.mu, "must be >= 0 (a friction coefficient)");
-      rule(nd.law.e_n >= 0 && nd.law.e_n <= 1, sec + "e_n", nd.law.e_n,
-           "must lie in [0, 1] (a restitution)");
-      rule(nd.law.e_t >= 0 && nd.law.e_t <= 1, sec + "e_t", nd.law.e_t,
-           "must lie in [0, 1] (a restitution)");
+      law_rules(sec, nd.law);
       if (!nd.stator.rigid) {
         rule(nd.stator.mass > 0, sec + "stator_mass", nd.stator.mass,
              "must be > 0 (the ring's mass)");
@@ -1405,12 +1397,18 @@ class Loader {
          "must be >= 0 (m eps [kg m]; its direction is loads.unbalance_phase)");
   }
 
+  /// The one rule of a contact law, for every key that takes one (contact.*, plane.K.*,
+  /// contact_node.K.*; prefix: the section with its dot).
+  void law_rules(const std::string& prefix, const ContactLaw& l) {
+    rule(l.mu >= 0, prefix + "mu", l.mu, "must be >= 0 (a friction coefficient)");
+    rule(l.e_n >= 0 && l.e_n <= 1, prefix + "e_n", l.e_n, "must lie in [0, 1] (a restitution)");
+    rule(l.e_t >= 0 && l.e_t <= 1, prefix + "e_t", l.e_t, "must lie in [0, 1] (a restitution)");
+  }
+
   void common_rules(const CaseSpec& c) {
     const auto& k = c.contact();
     if (c.model != "rigid-rotor" || c.params.planes.empty()) {  // (else each plane's law)
-      rule(k.mu >= 0, "contact.mu", k.mu, "must be >= 0 (a friction coefficient)");
-      rule(k.e_n >= 0 && k.e_n <= 1, "contact.e_n", k.e_n, "must lie in [0, 1] (a restitution)");
-      rule(k.e_t >= 0 && k.e_t <= 1, "contact.e_t", k.e_t, "must lie in [0, 1] (a restitution)");
+      law_rules("contact.", k);
     }
     rule(c.run.t_start >= 0, "run.t_start", c.run.t_start, "must be >= 0");
     rule(c.run.t_end > 0, "run.t_end", c.run.t_end, "must be > 0");

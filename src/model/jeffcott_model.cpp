@@ -139,42 +139,16 @@ void JeffcottModel::smooth_force_jacobians(double /*t*/, VecIn q, VecIn v, MatOu
 
 void JeffcottModel::compute_contact(int /*k*/, double /*t*/, VecIn q, VecIn v,
                                     ContactKinematics& c) const {
-  double* wn = c.W_N.data();
-  double* wt = c.W_T.data();
-  for (int i = 0; i < n_; ++i) wn[i] = wt[i] = 0.0;
-  c.b_N = c.b_T = 0.0;
-  const bool sprung = n_ == 5;
-  const double xs = sprung ? q[XS] : 0.0, ys = sprung ? q[YS] : 0.0;
-  const double vxs = sprung ? v[XS] : 0.0, vys = sprung ? v[YS] : 0.0;
-  const double sx = q[XR] - xs, sy = q[YR] - ys;
-  const double rho = std::sqrt(sx * sx + sy * sy);
-  c.d_N = p_.stator.gap - rho;
-  if (rho == 0.0) {  // centred: no normal, and no contact possible (d_N = g0 > 0)
-    c.normal_defined = false;
-    c.v_N = c.v_t = c.wdot_N = c.wdot_T = 0.0;
-    return;
-  }
-  c.normal_defined = true;
-  const double R = p_.rotor.radius;
-  const double nx = sx / rho, ny = sy / rho, tx = ny, ty = -nx;
-  wn[XR] = -nx;
-  wn[YR] = -ny;
-  wt[XR] = tx;
-  wt[YR] = ty;
-  wt[TH] = -R;
-  if (sprung) {
-    wn[XS] = nx;
-    wn[YS] = ny;
-    wt[XS] = -tx;
-    wt[YS] = -ty;
-  }
-  const double dvx = v[XR] - vxs, dvy = v[YR] - vys;
-  const double vn = nx * dvx + ny * dvy;  // n . r'
-  const double vt = tx * dvx + ty * dvy;  // t . r'
-  c.v_N = -vn;
-  c.v_t = vt - R * v[TH];
-  c.wdot_N = -vt * vt / rho;
-  c.wdot_T = vt * c.v_N / rho;
+  // the disc centre inside the ring (x_s, y_s), or the fixed ring at the origin
+  RingContact g;
+  g.ix = {XR, -1};
+  g.iy = {YR, -1};
+  g.w = {1.0, 0.0};
+  g.ring = n_ == 5 ? XS : -1;
+  g.gap = p_.stator.gap;
+  g.radius = p_.rotor.radius;
+  for (int i = 0; i < n_; ++i) c.W_N[i] = c.W_T[i] = 0.0;
+  ring_contact_kinematics(g, TH, q, v, c);
 }
 
 double JeffcottModel::kinetic_energy(double /*t*/, VecIn q, VecIn v) const {

@@ -289,45 +289,17 @@ void MatrixModel::smooth_force_jacobians(double /*t*/, VecIn q, VecIn v, MatOut 
 
 void MatrixModel::compute_contact(int k, double /*t*/, VecIn q, VecIn v,
                                   ContactKinematics& c) const {
-  // the Jeffcott rotor's kinematics with the disc centre at node k's (x, y)
+  // node k's (x, y) inside its ring (x_s_k, y_s_k), or a fixed ring at the origin
   const Node& nd = this->nd(k);
-  const int ix = nd.ix, iy = nd.iy, xs_i = nd.xs, ys_i = nd.ys;
-  const bool sprung = nd.sprung();
-  double* wn = c.W_N.data();
-  double* wt = c.W_T.data();
-  for (int i = 0; i < N_; ++i) wn[i] = wt[i] = 0.0;
-  c.b_N = c.b_T = 0.0;
-  const double xs = sprung ? q[xs_i] : 0.0, ys = sprung ? q[ys_i] : 0.0;
-  const double vxs = sprung ? v[xs_i] : 0.0, vys = sprung ? v[ys_i] : 0.0;
-  const double sx = q[ix] - xs, sy = q[iy] - ys;
-  const double rho = std::sqrt(sx * sx + sy * sy);
-  c.d_N = nd.gap - rho;
-  if (rho == 0.0) {  // centred: no normal, and no contact possible (d_N = g0 > 0)
-    c.normal_defined = false;
-    c.v_N = c.v_t = c.wdot_N = c.wdot_T = 0.0;
-    return;
-  }
-  c.normal_defined = true;
-  const double R = nd.radius;
-  const double nx = sx / rho, ny = sy / rho, tx = ny, ty = -nx;
-  wn[ix] = -nx;
-  wn[iy] = -ny;
-  wt[ix] = tx;
-  wt[iy] = ty;
-  wt[th_] = -R;
-  if (sprung) {
-    wn[xs_i] = nx;
-    wn[ys_i] = ny;
-    wt[xs_i] = -tx;
-    wt[ys_i] = -ty;
-  }
-  const double dvx = v[ix] - vxs, dvy = v[iy] - vys;
-  const double vn = nx * dvx + ny * dvy;
-  const double vt = tx * dvx + ty * dvy;
-  c.v_N = -vn;
-  c.v_t = vt - R * v[th_];
-  c.wdot_N = -vt * vt / rho;
-  c.wdot_T = vt * c.v_N / rho;
+  RingContact g;
+  g.ix = {nd.ix, -1};
+  g.iy = {nd.iy, -1};
+  g.w = {1.0, 0.0};
+  g.ring = nd.sprung() ? nd.xs : -1;
+  g.gap = nd.gap;
+  g.radius = nd.radius;
+  for (int i = 0; i < N_; ++i) c.W_N[i] = c.W_T[i] = 0.0;
+  ring_contact_kinematics(g, th_, q, v, c);
 }
 
 double MatrixModel::kinetic_energy(double /*t*/, VecIn q, VecIn v) const {

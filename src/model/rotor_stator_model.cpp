@@ -61,7 +61,7 @@ RotorStatorModel::RotorStatorModel(const RotorStatorParams& p)
   if (single_) {
     rings_.push_back({XS, p.stator.mass, p.stator.k, p.stator.c, 1.0 / p.stator.mass});
     inv_ms_ = 1.0 / p.stator.mass;
-    planes_.push_back({1.0, true, p.rotor.radius, p.stator.gap, p.contact, XS});
+    planes_.push_back({1.0, true, p.rotor.radius, p.stator.gap, p.contact, XS, {}});
     n_ = kDofs;
   } else {
     n_ = 5;
@@ -84,24 +84,25 @@ RotorStatorModel::RotorStatorModel(const RotorStatorParams& p)
   // the chart parametrises one plane at R on a sprung ring in (x_s, y_s) = dofs 5, 6: the
   // paper's model, or one [[plane]] that is exactly it
   chartable_ = planes_.size() == 1 && planes_[0].at_R && planes_[0].ring == XS;
-  if (planes_.size() > 1) {  // the K-contact chart: each plane's point (eq. 9-10) and ring
-    std::vector<RingContact> rc;
-    for (const Plane& pl : planes_) {
-      RingContact c;
-      if (pl.at_R) {
-        c.ix = {XR, -1};
-        c.iy = {YR, -1};
-        c.w = {1.0, 0.0};
-      } else {
-        c.ix = {XB, XR};
-        c.iy = {YB, YR};
-        c.w = {1.0 - pl.s, pl.s};
-      }
-      c.ring = pl.ring;
-      c.gap = pl.gap;
-      c.radius = pl.radius;
-      rc.push_back(c);
+  // each plane's point (eq. 9-10) and ring: its contact kinematics and the K-contact chart
+  for (Plane& pl : planes_) {
+    RingContact& c = pl.geom;
+    if (pl.at_R) {
+      c.ix = {XR, -1};
+      c.iy = {YR, -1};
+      c.w = {1.0, 0.0};
+    } else {
+      c.ix = {XB, XR};
+      c.iy = {YB, YR};
+      c.w = {1.0 - pl.s, pl.s};
     }
+    c.ring = pl.ring;
+    c.gap = pl.gap;
+    c.radius = pl.radius;
+  }
+  if (planes_.size() > 1) {
+    std::vector<RingContact> rc;
+    for (const Plane& pl : planes_) rc.push_back(pl.geom);
     ring_chart_.emplace(n_, TH, std::move(rc));
   }
   const double jl = r.Jd / (l_ * l_);
@@ -436,68 +437,15 @@ void RotorStatorModel::smooth_force_jacobians(double /*t*/, VecIn q, VecIn v, Ma
 
 void RotorStatorModel::plane_contact(int k, VecIn q, VecIn v, ContactKinematics& c) const {
   const Plane& pl = planes_[static_cast<std::size_t>(k)];
-  // every entry of W_N and W_T written (the zeros too: no memset call in this hot path)
+  // every entry of W_N and W_T written (the zeros too: no memset call in this hot path): the
+  // rings (none but this plane's), ring by ring, since a loop over every coordinate after the
+  // spin became two memset calls (measured: 38 % of this function's instructions); B's entries
+  // for a plane at R; the rest by the one ring-contact kinematics
   double* wn = c.W_N.data();
   double* wt = c.W_T.data();
-  c.b_N = c.b_T = 0.0;
-  // the rotor's point in the plane (R itself, or the interpolation between B and R) and the
-  // ring's centre (the origin for a fixed ring)
-  const double s = pl.s, sb = 1.0 - s;
-  const double px = pl.at_R ? q[XR] : sb * q[XB] + s * q[XR];
-  const double py = pl.at_R ? q[YR] : sb * q[YB] + s * q[YR];
-  const int d = pl.ring;
-  const double sx = px - (d >= 0 ? q[d] : 0.0), sy = py - (d >= 0 ? q[d + 1] : 0.0);
-  // sqrt instead of hypot: positions are O(1e-3) m at most, no overflow or underflow is
-  // possible, and hypot's extra precision costs ~2x in the hot path of every solver
-  const double rho = std::sqrt(sx * sx + sy * sy);
-  c.d_N = pl.gap - rho;
-  if (rho == 0.0) {  // centred rotor: no normal; d_N = g0 > 0, so no contact can exist here
-    c.normal_defined = false;
-    for (int i = 0; i < n_; ++i) wn[i] = wt[i] = 0.0;
-    c.v_N = c.v_t = c.wdot_N = c.wdot_T = 0.0;
-    return;
-  }
-  c.normal_defined = true;
-  const double nx = sx / rho, ny = sy / rho;
-  const double tx = ny, ty = -nx;
-  // the rings (none but this plane's), ring by ring: every coordinate after the spin is a
-  // ring's (constructor), and a loop over them became two memset calls (measured: 38 % of this
-  // function's instructions)
   for (const Ring& rg : rings_) wn[rg.dof] = wn[rg.dof + 1] = wt[rg.dof] = wt[rg.dof + 1] = 0.0;
-  wn[TH] = 0.0;
-  if (pl.at_R) {
-    wn[XB] = wn[YB] = 0.0;
-    wn[XR] = -nx;
-    wn[YR] = -ny;
-    wt[XB] = wt[YB] = 0.0;
-    wt[XR] = tx;
-    wt[YR] = ty;
-  } else {
-    wn[XB] = -sb * nx;
-    wn[YB] = -sb * ny;
-    wn[XR] = -s * nx;
-    wn[YR] = -s * ny;
-    wt[XB] = sb * tx;
-    wt[YB] = sb * ty;
-    wt[XR] = s * tx;
-    wt[YR] = s * ty;
-  }
-  wt[TH] = -pl.radius;
-  if (d >= 0) {
-    wn[d] = nx;
-    wn[d + 1] = ny;
-    wt[d] = -tx;
-    wt[d + 1] = -ty;
-  }
-  const double vpx = pl.at_R ? v[XR] : sb * v[XB] + s * v[XR];
-  const double vpy = pl.at_R ? v[YR] : sb * v[YB] + s * v[YR];
-  const double dvx = vpx - (d >= 0 ? v[d] : 0.0), dvy = vpy - (d >= 0 ? v[d + 1] : 0.0);
-  const double wn_ = nx * dvx + ny * dvy;  // n . dsr/dt
-  const double wt_ = tx * dvx + ty * dvy;  // t . dsr/dt
-  c.v_N = -wn_;
-  c.v_t = wt_ - pl.radius * v[TH];
-  c.wdot_N = -wt_ * wt_ / rho;
-  c.wdot_T = wt_ * c.v_N / rho;
+  if (pl.at_R) wn[XB] = wn[YB] = wt[XB] = wt[YB] = 0.0;
+  ring_contact_kinematics(pl.geom, TH, q, v, c);
 }
 
 void RotorStatorModel::compute_contact(int k, double /*t*/, VecIn q, VecIn v,
@@ -506,42 +454,11 @@ void RotorStatorModel::compute_contact(int k, double /*t*/, VecIn q, VecIn v,
     plane_contact(k, q, v, c);
     return;
   }
-  // the paper's plane at R on the ring of [stator], with fixed indices: plane_contact gives the
-  // same numbers, and this is every solver's hot path (measured: the general path with its
-  // branches cost Moreau-Jean 9 % on the reference case)
+  // the paper's plane at R on the ring of [stator], with fixed indices: B's entries are 0
   double* wn = c.W_N.data();
   double* wt = c.W_T.data();
-  c.b_N = c.b_T = 0.0;
-  const double sx = q[XR] - q[XS], sy = q[YR] - q[YS];
-  const double rho = std::sqrt(sx * sx + sy * sy);
-  c.d_N = p_.stator.gap - rho;
-  if (rho == 0.0) {
-    c.normal_defined = false;
-    for (int i = 0; i < kDofs; ++i) wn[i] = wt[i] = 0.0;
-    c.v_N = c.v_t = c.wdot_N = c.wdot_T = 0.0;
-    return;
-  }
-  c.normal_defined = true;
-  const double nx = sx / rho, ny = sy / rho;
-  const double tx = ny, ty = -nx;
-  wn[XB] = wn[YB] = wn[TH] = 0.0;
-  wn[XR] = -nx;
-  wn[YR] = -ny;
-  wn[XS] = nx;
-  wn[YS] = ny;
-  wt[XB] = wt[YB] = 0.0;
-  wt[XR] = tx;
-  wt[YR] = ty;
-  wt[TH] = -p_.rotor.radius;
-  wt[XS] = -tx;
-  wt[YS] = -ty;
-  const double dvx = v[XR] - v[XS], dvy = v[YR] - v[YS];
-  const double wn_ = nx * dvx + ny * dvy;
-  const double wt_ = tx * dvx + ty * dvy;
-  c.v_N = -wn_;
-  c.v_t = wt_ - p_.rotor.radius * v[TH];
-  c.wdot_N = -wt_ * wt_ / rho;
-  c.wdot_T = wt_ * c.v_N / rho;
+  wn[XB] = wn[YB] = wt[XB] = wt[YB] = 0.0;
+  ring_contact_kinematics(planes_[0].geom, TH, q, v, c);
 }
 
 bool RotorStatorModel::plane_motion(int k, double /*t*/, VecIn q, VecIn v, PlaneMotion& out) const {

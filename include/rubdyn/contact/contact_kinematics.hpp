@@ -23,6 +23,9 @@
 //          wdot_T = (dW_T/dt)^T v + db_T/dt = (t . dsr/dt) v_N / |sr|  (+ db_T/dt)
 // |sr| = 0 (centred rotor): no normal is defined. Then d_N = g0 > 0, normal_defined = false and
 // W_N, W_T, v_N, v_t, wdot_* are zero: no contact can exist there, and no solver may use them.
+#include <array>
+#include <cmath>
+
 #include "rubdyn/core/types.hpp"
 
 namespace rubdyn {
@@ -42,5 +45,83 @@ struct ContactKinematics {
   double wdot_T = 0.0;  ///< (dW_T/dt)^T v + db_T/dt [m/s^2]
   bool normal_defined = true;
 };
+
+/// One ring contact's geometry: a rotor point P inside a ring of centre S. Every model's contacts
+/// are of this kind (the rigid rotor's planes, the Jeffcott disc, a matrices model's nodes), and
+/// the K-contact chart (ring_chart.hpp) parametrises them.
+struct RingContact {
+  /// The rotor's point: x = sum_j w[j] q[ix[j]], y = sum_j w[j] q[iy[j]] (unused terms: -1).
+  std::array<int, 2> ix{-1, -1}, iy{-1, -1};
+  std::array<double, 2> w{0.0, 0.0};
+  int ring = -1;        ///< the ring's x coordinate (y: ring + 1); -1: a fixed ring
+  double gap = 0.0;     ///< g_k [m]
+  double radius = 0.0;  ///< R_k, the seal radius (the spin's entry of W_T is -R_k) [m]
+};
+
+/// The one ring-contact kinematics (the header's formulas, paper eq. 17-19) of geometry g with the
+/// spin at coordinate `spin`: d_N, v_N, v_t, wdot_N, wdot_T, normal_defined, and the entries of
+/// W_N and W_T at the point's coordinates, the spin and the ring (0 when no normal is defined).
+/// The other entries of W_N and W_T are the caller's to set to 0 (a model knows which of them
+/// can be non-zero: the rigid rotor clears only its rings'). The point's coordinates of the two
+/// terms must differ from the ring's and the spin. b_N = b_T = 0 (nothing prescribed).
+inline void ring_contact_kinematics(const RingContact& g, int spin, VecIn q, VecIn v,
+                                    ContactKinematics& c) {
+  double* wn = c.W_N.data();
+  double* wt = c.W_T.data();
+  c.b_N = c.b_T = 0.0;
+  const bool two = g.ix[1] >= 0;
+  const double px = two ? g.w[0] * q[g.ix[0]] + g.w[1] * q[g.ix[1]] : g.w[0] * q[g.ix[0]];
+  const double py = two ? g.w[0] * q[g.iy[0]] + g.w[1] * q[g.iy[1]] : g.w[0] * q[g.iy[0]];
+  const int d = g.ring;
+  const double sx = px - (d >= 0 ? q[d] : 0.0), sy = py - (d >= 0 ? q[d + 1] : 0.0);
+  // sqrt instead of hypot: positions are O(1e-3) m at most, no overflow or underflow is
+  // possible, and hypot's extra precision costs ~2x in the hot path of every solver
+  const double rho = std::sqrt(sx * sx + sy * sy);
+  c.d_N = g.gap - rho;
+  auto set = [&](double* w, int i, double x) {
+    if (i >= 0) w[i] = x;
+  };
+  if (rho == 0.0) {  // centred: no normal; d_N = g0 > 0, so no contact can exist here
+    c.normal_defined = false;
+    for (int j = 0; j < 2; ++j) {
+      set(wn, g.ix[j], 0.0);
+      set(wn, g.iy[j], 0.0);
+      set(wt, g.ix[j], 0.0);
+      set(wt, g.iy[j], 0.0);
+    }
+    set(wn, spin, 0.0);
+    set(wt, spin, 0.0);
+    if (d >= 0) wn[d] = wn[d + 1] = wt[d] = wt[d + 1] = 0.0;
+    c.v_N = c.v_t = c.wdot_N = c.wdot_T = 0.0;
+    return;
+  }
+  c.normal_defined = true;
+  const double nx = sx / rho, ny = sy / rho;
+  const double tx = ny, ty = -nx;
+  set(wn, spin, 0.0);
+  for (int j = 0; j < (two ? 2 : 1); ++j) {
+    const double w = g.w[static_cast<std::size_t>(j)];
+    wn[g.ix[j]] = -w * nx;
+    wn[g.iy[j]] = -w * ny;
+    wt[g.ix[j]] = w * tx;
+    wt[g.iy[j]] = w * ty;
+  }
+  set(wt, spin, -g.radius);
+  if (d >= 0) {
+    wn[d] = nx;
+    wn[d + 1] = ny;
+    wt[d] = -tx;
+    wt[d + 1] = -ty;
+  }
+  const double vpx = two ? g.w[0] * v[g.ix[0]] + g.w[1] * v[g.ix[1]] : g.w[0] * v[g.ix[0]];
+  const double vpy = two ? g.w[0] * v[g.iy[0]] + g.w[1] * v[g.iy[1]] : g.w[0] * v[g.iy[0]];
+  const double dvx = vpx - (d >= 0 ? v[d] : 0.0), dvy = vpy - (d >= 0 ? v[d + 1] : 0.0);
+  const double vn = nx * dvx + ny * dvy;  // n . dsr/dt
+  const double vt = tx * dvx + ty * dvy;  // t . dsr/dt
+  c.v_N = -vn;
+  c.v_t = vt - (spin >= 0 ? g.radius * v[spin] : 0.0);
+  c.wdot_N = -vt * vt / rho;
+  c.wdot_T = vt * c.v_N / rho;
+}
 
 }  // namespace rubdyn

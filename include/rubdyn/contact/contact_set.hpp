@@ -3,8 +3,8 @@
 // the plane, as coulomb_signorini.hpp is for one. Exact enumeration of the contact modes for
 // K <= kMaxEnumContacts, a projected (non-smooth) Gauss-Seidel iteration beyond. Called by
 // Moreau-Jean with several contacts (the impulses of the active ones, docs/time-steppers.md 3.1)
-// and by the event-driven integrator with several (its joint impacts and mode decisions,
-// src/hybrid/event_multi.cpp). Derivation, tie rule and tolerances:
+// and by the event-driven engine (its impacts and mode decisions, for one contact and for K:
+// src/hybrid/contact_decisions.cpp). Derivation, tie rule and tolerances:
 // docs/contact-set.md.
 //
 // Contact i has rows 2i (normal) and 2i+1 (tangential) of the 2K x 2K Delassus operator

@@ -42,6 +42,7 @@
 #include <span>
 #include <vector>
 
+#include "rubdyn/contact/contact_kinematics.hpp"
 #include "rubdyn/core/run_types.hpp"
 #include "rubdyn/core/types.hpp"
 
@@ -51,19 +52,9 @@ namespace rubdyn {
 /// coefficient): their contacts are redundant or over-determine the rotor.
 inline constexpr double kRingChartPivot = 1e-9;
 
-/// One contact's geometry for the chart.
-struct RingContact {
-  /// The rotor's point: x = sum_j w[j] q[ix[j]], y = sum_j w[j] q[iy[j]] (unused terms: -1).
-  std::array<int, 2> ix{-1, -1}, iy{-1, -1};
-  std::array<double, 2> w{0.0, 0.0};
-  int ring = -1;        ///< the ring's x coordinate (y: ring + 1); -1: a fixed ring
-  double gap = 0.0;     ///< g_k [m]
-  double radius = 0.0;  ///< R_k, the seal radius (the spin's entry of W_T is -R_k) [m]
-};
-
 /// What the chart keeps of the state where a phase began (the sticking contacts' angles).
 struct RingAnchor {
-  static constexpr int kMax = 8;
+  static constexpr int kMax = kMaxContacts;
   double theta0 = 0.0;
   std::array<double, kMax> phi0{};
 };

@@ -65,6 +65,8 @@ enum class Termination : int {
   /// every sample and event; a reference must satisfy the law it claims)
   LawViolation,
 };
+/// The last Termination (every value from Completed to it has a name: to_string).
+inline constexpr Termination kLastTermination = Termination::LawViolation;
 std::string_view to_string(Termination t);
 
 /// Exit codes of the CLI (README.md, "Exit codes and the output contract"; `rubdyn --help`).

@@ -1,62 +1,70 @@
 #pragma once
 // The event-driven hybrid integrator: reference solutions computed event by event.
 //
-// A run is a sequence of phases (free, slip+, slip-, stick). Each phase is a smooth ODE
-// integrated by CVODE with error control and root finding on the witnesses that end it:
-//   free:    d_N / g0 (closing: contact onset), v_N / v_ref (rising: a gap minimum, for grazing)
-//   slip s:  F_N / F_ref (falling: lift-off), v_t / v_ref (towards 0: stick or reversal;
-//            not built when mu = 0)
-//   stick:   F_N / F_ref (lift-off), (mu F_N -+ F_T) / F_ref (falling: stick -> slip)
+// One engine for one contact and for K (up to kMaxContacts): the hybrid state is the tuple of
+// the contacts' modes (free, slip+, slip-, stick each), one contact the smallest case. A run is
+// a sequence of phases; each is a smooth ODE integrated by CVODE with error control and root
+// finding on the witnesses that end it, per contact k:
+//   free:    d_N,k / g0 (closing: contact onset), v_N,k / v_ref (rising: a gap minimum, for
+//            grazing)
+//   slip s:  F_N,k / F_ref (falling: lift-off), v_t,k / v_ref (towards 0: stick or reversal;
+//            not built when mu_k = 0)
+//   stick:   F_N,k / F_ref (lift-off), (mu F_N,k -+ F_T,k) / F_ref (falling: stick -> slip)
 //   all:     (omega - omega_lim) / omega_lim (rising: the crossing time, no event)
+// The witnesses of a phase are set when it (re)starts and never between steps; those that start
+// degenerate (after a release on the constraint, a slip from rest) begin in a banded form and
+// are armed by their value (docs/events-and-sundials.md 3.2).
 // Contact phases (ContactFormulation):
-//   reduced (default): the ODE in the model's minimal coordinates (contact/contact_chart.hpp):
-//            slip in 6 coordinates (the rotor centre on the clearance circle, phi free), stick in
-//            5 (phi tied to theta by rolling). The right-hand side is the constrained
-//            acceleration of the full model (contact_problem.hpp, which also gives F_N, F_T for
-//            the witnesses) reduced to p''. The constraints hold to round-off by construction:
-//            no projection, nothing taken out of the energy. CVODE Adams with fixed-point
-//            iteration (measured on the rolling regime: 4.4x fewer steps than BDF, no Jacobian);
-//            an angle's error is weighted by the displacement it causes (phi: g0 per radian,
-//            theta - theta0 in stick: R_r per radian), at the gap's scale.
-//            With several contacts (event_multi.cpp): the K-contact chart of
-//            contact/ring_chart.hpp (each closed contact's ring replaced by one angle, or tied
-//            to the spin in stick; a fixed ring's two equations solved for two of the rotor's
-//            coordinates) wherever it applies; the projection formulation for the other
-//            phases (rank-deficient fixed rings, a shared ring, stick at a prescribed speed).
+//   reduced (default): the ODE in minimal coordinates: the model's ContactChart with one
+//            contact (contact/contact_chart.hpp; the rigid rotor: slip in 6 coordinates, stick in
+//            5), its RingChart with K (contact/ring_chart.hpp: each closed contact's ring replaced
+//            by one angle, or tied to the spin in stick; fixed rings eliminate rotor
+//            coordinates), wherever it applies. The right-hand side is the constrained
+//            acceleration of the full model reduced to p''; the constraints hold to round-off by
+//            construction. CVODE Adams with fixed-point iteration (measured on the rolling
+//            regime: 4.4x fewer steps than BDF, no Jacobian); an angle's error is weighted by the
+//            displacement it causes, at the gap's scale. The projection formulation where the
+//            chart does not apply (a shared ring, rank-deficient fixed rings, stick at a
+//            prescribed speed, a model without a chart).
 //   projection: the index-reduced DAE in full coordinates, CVODE-BDF with projection after
-//            every step (positions onto d_N = 0, velocities onto v_N = 0 and v_t = 0 in stick,
-//            mass-weighted). Kept as an in-house cross-check; also the fallback for a model
-//            without a chart.
+//            every step (positions onto d_N,k = 0, velocities onto v_N,k = 0 and v_t,k = 0 in
+//            stick, mass-weighted). Kept as an in-house cross-check.
 // The works of the applied loads, the dampers and friction are integrated with the state.
 // Per-phase cost (steps, wall seconds) is measured and reported in the summary.
-// At an event: contact onset with v_N < 0 -> impact map; any other switch -> the contact problem
-// at acceleration level decides the next phase. Both are the one Coulomb-Signorini solver of
-// contact/coulomb_signorini.hpp (impulse and acceleration level) with its one tie rule; the phase
-// whose witness fired is not a candidate while another mode is consistent.
+// At an event the contact problem of every contact at the constraint decides (contact/
+// contact_set.hpp, the one-contact kernel of coulomb_signorini.hpp at K = 1, with its one tie
+// rule): an onset closing faster than the velocity tolerance -> the impulse problem; any other
+// switch -> the acceleration-level problem, the phase whose witness fired excluded while another
+// mode is consistent, and where no combination is strictly consistent the next order (a zero
+// margin that falls along its mode's flow drops that mode). Every velocity projection at an
+// event obeys the law (the slip friction at a sliding contact). A cascade of impacts between
+// coupled contacts, and a bounce sequence, are integrated while their flights are resolved and
+// collapsed by impulses of the law below that (their error is of the order of the flight).
 // Every event is localised to the last time its witness has the ending phase's sign, to a few
 // ulps, on the interpolant of the step that found it (one localiser for all witnesses).
 // Painleve situations are logged; an inconsistent one ends the run (Termination::Painleve).
-// Impacts accumulating (e_n > 0) are detected by the bounce height falling below the position
-// tolerance; the remaining sequence is truncated by a plastic impact (logged as zeno with the
-// extrapolated accumulation time). Bounds on events at one instant and per simulated second end
-// runs whose mode switching loops or chatters (Termination::Chattering).
+// Every sample and event is checked against the law (F_N >= 0, |F_T| <= mu F_N, to ten
+// decision bands): a breach ends the run (Termination::LawViolation). Bounds on events at one
+// instant and per simulated second end runs whose mode switching loops or chatters
+// (Termination::Chattering). The same input gives the same bits: nothing decided depends on
+// the clock, the load, the addresses or the thread.
 // Output: dense samples on the output grid (CV_NORMAL interpolation), plus samples before and
 // after each event.
 //
-// Structure (src/hybrid/): event_driven.cpp is the loop advance -> classify -> dispatch ->
-// restart; phase_system.* holds the phase dynamics (one object and one CVODE session per
-// formulation and mode) and the witnesses; event_locator.hpp the localiser; mode_switching.* the
-// decisions at events (impact map, Zeno truncation, mode selection, gap minima); cvode_session.*
-// is the only file that touches SUNDIALS.
+// Structure (src/hybrid/, docs/architecture.md section 7): event_driven.cpp is the engine (the
+// loop advance -> classify -> dispatch -> restart); phase_session.* the phases (one CVODE session
+// per formulation) and their witnesses; phase_eval.* the contacts' mechanics at a state;
+// phase_chart.* the charts; contact_decisions.* the decisions at events; event_locator.hpp the
+// localiser; cvode_session.* is the only file that touches SUNDIALS.
 //
 // What a scene does not need is not built:
-//   - mu = 0: no tangential witness and no stick mode (Integrator::build_witnesses; the contact
-//     problem has no stick candidate without friction);
+//   - mu = 0: no tangential witness and no stick mode (the contact problem has no stick
+//     candidate without friction);
 //   - a scene that never closes the gap never builds contact quantities: the free-flight
-//     right-hand side uses only M and f (FreeFlight::rhs);
-//   - e_n = 0 never enters accumulation handling (ModeSwitcher::gap_closed);
+//     right-hand side uses only M and f;
+//   - e_n = 0 never enters accumulation handling;
 //   - output thinning costs no integration: samples are interpolated (CV_NORMAL);
-//   - omega_lim's witness is removed once crossed (main loop).
+//   - omega_lim's witness is left out of every phase that starts after it was crossed.
 #include <atomic>
 #include <functional>
 #include <vector>
@@ -112,8 +120,7 @@ std::vector<OptionProblem> event_driven_option_problems(const EventDrivenOptions
 /// Never throws from inside the time loop: numerical trouble ends the run with a typed
 /// termination, a message, and everything produced so far. Throws std::invalid_argument, before
 /// anything reaches the sink, listing every rule the options break (event_driven_option_problems)
-/// or for a model without a contact or with more than 8 (several contacts run the K-contact
-/// integrator of src/hybrid/event_multi.hpp; one contact this one). omega (monitor, omega_lim) is
+/// or for a model without a contact or with more than kMaxContacts. omega (monitor, omega_lim) is
 /// the rate of the model's spin_coordinate(); a model without one has no omega_lim witness.
 RunSummary run_event_driven(const LagrangianModel& model, const MechanicalState& initial,
                             double t_end, const EventDrivenOptions& opt, OutputSink& sink);

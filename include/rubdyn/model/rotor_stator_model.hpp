@@ -180,7 +180,9 @@ class RotorStatorModel final : public LagrangianModel {
     bool at_R = true;  ///< s == 1: the rotor's point is (x_r, y_r) itself
     double radius = 0, gap = 0;
     ContactLaw law;
-    int ring = -1;  ///< first dof of its ring, or -1
+    int ring = -1;     ///< first dof of its ring, or -1
+    RingContact geom;  ///< the rotor's point (R, or between B and R) and the ring, for the
+                       ///< one ring-contact kinematics (contact_kinematics.hpp)
   };
 
   /// compute_contact of plane k of a model with [[plane]] tables.
