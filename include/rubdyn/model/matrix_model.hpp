@@ -66,7 +66,7 @@ struct MatrixNode {
 };
 
 /// At most this many contact nodes (the event-driven integrator's K-contact limit).
-inline constexpr int kMaxContactNodes = 8;
+inline constexpr int kMaxContactNodes = kMaxContacts;  // the largest K (core/run_types.hpp)
 
 struct MatrixParams {
   MatrixRotorParams rotor;

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "rubdyn/contact/contact_law.hpp"
+#include "rubdyn/core/run_types.hpp"
 #include "rubdyn/model/loads.hpp"
 
 namespace rubdyn {
@@ -45,7 +46,7 @@ struct PlaneParams {
 
 /// At most this many [[plane]]s (the contact solvers enumerate up to 4 contacts exactly and
 /// iterate beyond; 8 planes is 8 rings, 21 coordinates).
-inline constexpr int kMaxPlanes = 8;
+inline constexpr int kMaxPlanes = kMaxContacts;  // the largest K (core/run_types.hpp)
 
 /// Defaults are the reference case (cases/reference.toml).
 struct RotorStatorParams {
