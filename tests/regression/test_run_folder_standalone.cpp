@@ -12,6 +12,7 @@
 //    instead of being written and then refused by `analyze`.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <filesystem>
@@ -105,10 +106,13 @@ TEST_CASE("Run folder: analyze draws the run's Campbell overlay after a matrix f
   const fs::path out = root / "out";
   REQUIRE(cli("run " + sh(src.string()) + " --t-end 0.01 --quiet --out " + sh(out.string())).code ==
           0);
-  REQUIRE(cli("analyze " + sh(out.string())).code == 0);
+  // frames of 4 ms (the default 40 ms is longer than the run: no spectrogram, no overlay)
+  const std::string analyze = "analyze --window 0.004 " + sh(out.string());
+  REQUIRE(cli(analyze).code == 0);
   const std::string campbell = slurp(out / "analysis" / "campbell.csv");
-  scale_csv(src.parent_path() / "matrices-paper" / "K.csv", 1.5);  // a stiffer bearing
-  REQUIRE(cli("analyze " + sh(out.string())).code == 0);
+  REQUIRE(std::count(campbell.begin(), campbell.end(), '\n') > 3);  // frames with frequencies
+  scale_csv(src.parent_path() / "matrices-paper" / "K.csv", 1.5);   // a stiffer bearing
+  REQUIRE(cli(analyze).code == 0);
   CHECK(slurp(out / "analysis" / "campbell.csv") == campbell);
   fs::remove_all(root);
 }
@@ -151,7 +155,7 @@ TEST_CASE("Run folder: a new run removes every plane's derived files and old mat
   REQUIRE(cli("run " + two + " --t-end 0.005 --quiet --out " + sh(dir.string())).code == 0);
   REQUIRE(cli("analyze " + sh(dir.string())).code == 0);
   REQUIRE(fs::exists(dir / "analysis" / "plane_2" / "derived.csv"));
-  REQUIRE(fs::exists(dir / "case.M.npy"));
+  CHECK(fs::exists(dir / "case.M.npy"));
   // the figures python3 -m rubdyn.plot draws for it (names from plot.py's write_all)
   for (const char* f : {"omega.png", "orbit_1.png", "orbit_2.png", "contact_1.png", "contact_2.png",
                         "friction_2.png", "timeline_2.png", "spectrogram_2.png"})
