@@ -47,13 +47,16 @@ std::string fmt_size(const char* what, Eigen::Index got, int want) {
 
 /// A validated case and how it was made: run() re-parses its text with the extra overrides, as
 /// the CLI parses the file with them (load_case(path, --set ... + solver options)), so that the
-/// numbers are the CLI's. The text is a snapshot taken when the case was loaded: editing the file
-/// afterwards changes nothing.
+/// numbers are the CLI's. The text, and the matrix files a case of kind "matrices" read, are a
+/// snapshot taken when the case was loaded: editing the files afterwards changes nothing.
 struct Case {
   CaseSpec spec;
   std::string path;                    ///< empty when the case came from TOML text
   std::string text;                    ///< the TOML text (of the file, as it was loaded)
   std::vector<std::string> overrides;  ///< "section.key=value"
+  /// the matrix files as first read (shared by the cases made from this one with more
+  /// overrides; a file an override names anew is read once and kept too)
+  std::shared_ptr<MatrixSnapshot> matrices = std::make_shared<MatrixSnapshot>();
 };
 
 /// The text of a case file, read as load_case reads it (binary, at most kMaxCaseBytes + 1
@@ -79,23 +82,27 @@ Case make_case_from_file(const std::string& path, const std::vector<std::string>
     // it did not: the file changed between the two reads
     throw CaseError({{path, 0, "(file)", "", "changed while it was read: load it again"}});
   }
-  CaseSpec spec = parse_case(*text, path, overrides);  // what load_case does with the text
-  return Case{std::move(spec), path, std::move(*text), overrides};
+  auto matrices = std::make_shared<MatrixSnapshot>();
+  // what load_case does with the text
+  CaseSpec spec = parse_case(*text, path, overrides, matrices.get());
+  return Case{std::move(spec), path, std::move(*text), overrides, std::move(matrices)};
 }
 
 Case make_case_from_text(const std::string& text, const std::string& source,
-                         const std::vector<std::string>& overrides) {
-  Case c{parse_case(text, source, overrides), {}, text, overrides};
+                         const std::vector<std::string>& overrides,
+                         std::shared_ptr<MatrixSnapshot> matrices = nullptr) {
+  if (!matrices) matrices = std::make_shared<MatrixSnapshot>();
+  Case c{parse_case(text, source, overrides, matrices.get()), {}, text, overrides, matrices};
   c.spec.source = source;
   return c;
 }
 
 /// The case with more overrides on top (later ones win), parsed from the case's snapshot of its
-/// text the way the CLI parses the file.
+/// text (and of its matrix files) the way the CLI parses the file.
 Case with_overrides(const Case& c, const std::vector<std::string>& more) {
   std::vector<std::string> all = c.overrides;
   all.insert(all.end(), more.begin(), more.end());
-  Case out = make_case_from_text(c.text, c.spec.source, all);
+  Case out = make_case_from_text(c.text, c.spec.source, all, c.matrices);
   out.path = c.path;
   return out;
 }
@@ -517,8 +524,14 @@ PYBIND11_MODULE(_core, m) {
       "each reads");
   m.def("load_case", &make_case_from_file, py::arg("path"),
         py::arg("overrides") = std::vector<std::string>{});
-  m.def("parse_case", &make_case_from_text, py::arg("text"), py::arg("source") = "<string>",
-        py::arg("overrides") = std::vector<std::string>{});
+  m.def(
+      "parse_case",
+      [](const std::string& text, const std::string& source,
+         const std::vector<std::string>& overrides) {
+        return make_case_from_text(text, source, overrides);
+      },
+      py::arg("text"), py::arg("source") = "<string>",
+      py::arg("overrides") = std::vector<std::string>{});
   m.def("with_overrides", &with_overrides, py::arg("case"), py::arg("overrides"));
   m.def("analyze", &analyze_columns, py::arg("case"), py::arg("columns"), py::arg("events"),
         py::arg("min_turns"), py::arg("t0") = py::none(), py::arg("t1") = py::none(),

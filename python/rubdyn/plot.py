@@ -9,6 +9,10 @@ output folder and returns a Figure.
     timeline(res)  phases (free / slip+ / slip- / stick) as bands, events as marks by kind
     spectrogram(d) the orbit's spectrogram with the Campbell overlay, from `rubdyn analyze`
 
+With several contact planes, orbit, contact, friction and timeline draw one plane: plane=k, or
+a plane's view res.plane(k) (without either they refuse, naming the planes); omega draws plane 1's
+phase bands. A fixed ring's centre is the origin (no x_s, y_s columns).
+
     python3 -m rubdyn.plot OUT_DIR [--png DIR]     writes every figure as PNG (default: OUT_DIR),
                                                    the spectrogram when OUT_DIR/analysis has one
 
@@ -51,6 +55,31 @@ TIMELINE_KINDS = ("impact", "liftoff", "stick", "slip", "zeno", "grazing", "pain
 
 def _result(res):
     return res if isinstance(res, Result) else read(res)
+
+
+def _one_plane(res, what, plane=None):
+    """The Result of one contact plane that a figure of one plane draws: `res` itself when it is
+    a plane's view (Result.plane), else its plane `plane` (default: the only one), with that
+    plane's centres from the model (a fixed ring's centre is the origin: no x_s column). A run
+    with several planes needs plane=k: drawing one of them unasked would be silent nonsense."""
+    res = _result(res)
+    k = res.__dict__.get("plane_index")
+    if k is not None:
+        if plane is not None and plane != k:
+            raise ValueError(f"{what}: this result is plane {k}'s view; plane={plane!r} asked")
+        return res
+    n = res.planes
+    if plane is None:
+        if n != 1:
+            raise ValueError(f"{what}: this run has {n} contact planes: give plane=k "
+                             f"(1..{n}), or draw one plane's view res.plane(k); "
+                             "write_all draws each")
+        plane = 1
+    if res.case is None:  # a Result made by hand: its own columns, the ring at the origin
+        if n == 1 and plane == 1:
+            return res
+        raise ValueError(f"{what}: plane {plane!r} needs the run's case (Result.case)")
+    return res.plane(plane)
 
 
 def _case_value(res, name, default=None):
@@ -156,8 +185,11 @@ def _log_if_wide(ax, y, phase, linthresh):
 
 
 def omega(res, max_points=4000):
-    """omega(t) [rad/s] with omega_lim and the time it is passed (summary.t_omega_lim)."""
+    """omega(t) [rad/s] with omega_lim and the time it is passed (summary.t_omega_lim). With
+    several contact planes the phase bands under it are plane 1's."""
     res = _result(res)
+    if res.__dict__.get("plane_index") is None and res.planes > 1:
+        res = res.plane(1)
     plt = _plt()
     fig, ax = plt.subplots(figsize=(8, 4.2), layout="constrained")
     i = decimate(res, ["omega"], max_points)
@@ -182,14 +214,16 @@ def omega(res, max_points=4000):
     return fig
 
 
-def orbit(res, max_points=20000):
+def orbit(res, max_points=20000, plane=None):
     """The rotor centre relative to the stator centre (x_r - x_s, y_r - y_s) [um], coloured by phase,
-    inside the clearance circle of radius g0."""
-    res = _result(res)
+    inside the clearance circle of radius g0 (a fixed ring's centre is the origin). With several
+    contact planes, plane=k draws plane k's (or pass res.plane(k))."""
+    res = _one_plane(res, "orbit", plane)
     plt = _plt()
     fig, ax = plt.subplots(figsize=(6, 6), layout="constrained")
-    dx = (res["x_r"] - res["x_s"]) * 1e6
-    dy = (res["y_r"] - res["y_s"]) * 1e6
+    zero = np.zeros(len(res))
+    dx = (res["x_r"] - (res["x_s"] if "x_s" in res else zero)) * 1e6
+    dy = (res["y_r"] - (res["y_s"] if "y_s" in res else zero)) * 1e6
     res_rel = Result({"t": res["t"], "dx": dx, "dy": dy, "phase": res["phase"]}, res.events,
                      res.summary)
     i = decimate(res_rel, ["dx", "dy"], max_points)
@@ -225,9 +259,10 @@ def orbit(res, max_points=20000):
     return fig
 
 
-def contact(res, max_points=4000):
-    """d_N / g0 and the normal force F_N [N] against time."""
-    res = _result(res)
+def contact(res, max_points=4000, plane=None):
+    """d_N / g0 and the normal force F_N [N] against time (of plane k with plane=k when there
+    are several)."""
+    res = _one_plane(res, "contact", plane)
     plt = _plt()
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True, layout="constrained")
     i = decimate(res, ["d_N", "F_N"], max_points)
@@ -247,9 +282,10 @@ def contact(res, max_points=4000):
     return fig
 
 
-def friction(res, max_points=4000):
-    """v_t [m/s] and the friction torque R_r F_T over the driving torque tau_a (braking > 0)."""
-    res = _result(res)
+def friction(res, max_points=4000, plane=None):
+    """v_t [m/s] and the friction torque R_r F_T over the driving torque tau_a (braking > 0), of
+    plane k with plane=k when there are several."""
+    res = _one_plane(res, "friction", plane)
     plt = _plt()
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True, layout="constrained")
     i = decimate(res, ["v_t", "F_T"], max_points)
@@ -260,7 +296,8 @@ def friction(res, max_points=4000):
     a1.axhline(0.0, color="0.3", lw=0.6)
     a1.set_ylabel("v_t [m/s]")
     r_r, tau = _case_value(res, "radius"), _case_value(res, "torque")
-    if r_r is not None and tau:
+    # (a prescribed spin has no driving torque: NaN, its holding torque is an output)
+    if r_r is not None and tau and np.isfinite(tau):
         # W_T has -R_r on theta (contact_kinematics.hpp): the friction torque on the spin is
         # -R_r F_T; braking (against a positive tau_a) is drawn positive.
         ratio = r_r * res["F_T"] / tau
@@ -284,10 +321,11 @@ def friction(res, max_points=4000):
     return fig
 
 
-def timeline(res):
+def timeline(res, plane=None):
     """Phases as bands (free / slip+ / slip- / stick, colour and hatching) and every event as a
-    mark on the row of its kind (count in the label); the legend sits below the axes."""
-    res = _result(res)
+    mark on the row of its kind (count in the label); the legend sits below the axes. With
+    several contact planes, plane=k draws plane k's phases and events."""
+    res = _one_plane(res, "timeline", plane)
     plt = _plt()
     ev = res.events if res.events is not None else np.zeros(0, dtype=[("t", "f8"), ("kind", "U10")])
     present = [k for k in dict.fromkeys(ev["kind"]) if k not in TIMELINE_KINDS]

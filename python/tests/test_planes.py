@@ -90,3 +90,71 @@ def test_two_planes_figures(two, tmp_path):
     paths = [os.path.basename(p) for p in rp.write_all(two, str(tmp_path))]
     for name in ("orbit_1.png", "orbit_2.png", "contact_2.png", "timeline_2.png", "omega.png"):
         assert name in paths, paths
+
+
+def _figure_tests(res, tmp_path=None):
+    """Every figure of a run draws data; with several planes each figure of one plane takes
+    plane=k and refuses, naming the planes, without it. With tmp_path, write_all too."""
+    pytest.importorskip("matplotlib")
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import rubdyn.plot as rp
+    for name, make in rp.FIGURES.items():
+        planes = [None] if res.planes == 1 or name == "omega" else range(1, res.planes + 1)
+        for k in planes:
+            fig = make(res) if k is None else make(res, plane=k)
+            assert sum(len(ax.lines) for ax in fig.axes) > 0, (name, k)
+            plt.close(fig)
+        if res.planes > 1 and name != "omega":
+            with pytest.raises(ValueError, match=f"{res.planes} contact planes"):
+                make(res)
+    if tmp_path is None:
+        return []
+    paths = rp.write_all(res, str(tmp_path))
+    assert paths and all(os.path.getsize(p) > 0 for p in paths)
+    return [os.path.basename(p) for p in paths]
+
+
+def test_figures_of_a_rigid_stator_jeffcott_run(tmp_path):
+    # a fixed ring has no coordinates (no x_s column: KeyError 'x_s' before); its centre is the
+    # origin, the orbit the disc's own
+    path = os.path.join(os.path.dirname(REFERENCE), "jeffcott.toml")
+    text = open(path).read()
+    a = text.index("[stator]")
+    b = text.index("\n[", a)
+    stator = "\n".join(line for line in text[a:b].split("\n")
+                       if not line.split("=")[0].strip() in ("mass", "k", "c"))
+    text = text[:a] + stator.replace("[stator]", "[stator]\nrigid = true", 1) + text[b:]
+    res = rubdyn.run(rubdyn.parse_case(text, path), t_end=0.02)
+    assert "x_s" not in res
+    names = _figure_tests(res, tmp_path)
+    assert "orbit.png" in names
+    p = res.plane(1)
+    assert np.array_equal(p["x_s"], np.zeros(len(res)))
+
+
+def test_figures_of_a_two_contact_matrices_run(tmp_path):
+    # two [[contact_node]]s: phase_1, phase_2 and no phase column (KeyError 'phase' before)
+    res = rubdyn.run(os.path.join(os.path.dirname(REFERENCE), "matrices-two-plane.toml"),
+                     t_end=0.012)
+    assert res.planes == 2 and "phase" not in res
+    names = _figure_tests(res, tmp_path)
+    for name in ("omega.png", "orbit_1.png", "orbit_2.png", "contact_2.png", "timeline_2.png"):
+        assert name in names, names
+
+
+@pytest.mark.parametrize("spin", [(0.0, 0.0), (0.0, 1e5), (1000.0, -1e5)])
+def test_prescribed_spin_two_planes_views(spin):
+    # a prescribed spin on the two-plane rotor (held at 0, ramped up, ramped down through 0):
+    # plane 2's centres come from the wrapped model ("does not locate its centres" before)
+    text = open(TWO_PLANE).read().replace("torque  = 20.0", 'spin = "prescribed"')
+    case = rubdyn.parse_case(text, TWO_PLANE, overrides={"initial.omega0": spin[0],
+                                                         "loads.spin_accel": spin[1]})
+    res = rubdyn.run(case, t_end=0.012)
+    assert res.summary["complete"]
+    p2 = res.plane(2)
+    assert np.array_equal(p2["x_r"], 0.5 * res["x_b"] + 0.5 * res["x_r"])
+    assert rubdyn.analyze(res, plane=2).verdicts["events"] == len(res.events)
+    if spin[1] < 0:  # (the figures once: they cost seconds)
+        _figure_tests(res)

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "rubdyn/io/output_reader.hpp"
+#include "rubdyn/io/text_files.hpp"
 
 namespace rubdyn {
 
@@ -252,11 +253,9 @@ Comparison compare_solutions(const Series& a, const Series& b, const std::vector
 }
 
 std::string comparison_json(const Comparison& c, const std::string& a, const std::string& b) {
-  auto q = [](const std::string& s) {
-    std::string o = "\"";
-    for (char ch : s) o += (ch == '"' || ch == '\\') ? std::string("\\") + ch : std::string(1, ch);
-    return o + "\"";
-  };
+  // JSON strings: a folder name may hold a line end or another control character
+  // (quoted_string escapes them, as summary.json's strings)
+  auto q = [](const std::string& s) { return quoted_string(s); };
   std::string j = fmt::format(
       "{{\n  \"a\": {},\n  \"b\": {},\n  \"t0\": {:.17g},\n  \"t1\": {:.17g},\n  \"points\": {},\n "
       " \"columns\": {{",
@@ -266,8 +265,8 @@ std::string comparison_json(const Comparison& c, const std::string& a, const std
     // JSON has no infinity: a non-finite difference is written as null (and counted)
     auto num = [](double x) { return std::isfinite(x) ? fmt::format("{:.17g}", x) : "null"; };
     j += fmt::format(
-        "{}\n    \"{}\": {{\"sup\": {}, \"rms\": {}, \"t_sup\": {:.17g}, \"non_finite\": {}}}",
-        i ? "," : "", d.name, num(d.sup), num(d.rms), d.t_sup, d.non_finite);
+        "{}\n    {}: {{\"sup\": {}, \"rms\": {}, \"t_sup\": {:.17g}, \"non_finite\": {}}}",
+        i ? "," : "", q(d.name), num(d.sup), num(d.rms), d.t_sup, d.non_finite);
   }
   j += "\n  },\n  \"missing_columns\": [";
   for (std::size_t i = 0; i < c.missing.size(); ++i) j += (i ? ", " : "") + q(c.missing[i]);

@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
+#include <string>
 
 namespace rubdyn {
 
@@ -63,13 +65,36 @@ bool RunEnvelope::check_rate(double t, long steps) {
   if (!(remaining > 0.0)) return false;
   const double h_mean = dt / static_cast<double>(dn);
   const double need = static_cast<double>(steps) + remaining / h_mean;  // dt <= 0: inf
-  if (need <= kMaxRunSteps) return false;
+  std::string why;
+  if (static_cast<double>(steps) >= kMaxRunSteps) {
+    why = fmt::format("the run has taken {} steps, the most a run may take", steps);
+  } else if (need <= kMaxRunSteps) {
+    over_windows_ = 0;  // within the bound: whatever came before was a burst
+    return false;
+  } else {
+    // over the bound: a collapse only if the step is below round-off, or has fallen by
+    // kCollapseFall over the last kCollapseWindows windows, all over the bound
+    const double oldest = over_h_[static_cast<std::size_t>(over_windows_ % kCollapseWindows)];
+    over_h_[static_cast<std::size_t>(over_windows_ % kCollapseWindows)] = h_mean;
+    ++over_windows_;
+    // (not h_mean > ...: a window that did not advance, dt <= 0, is below round-off too)
+    const double t_scale = std::max(std::abs(t), std::abs(t_end_));
+    if (!(h_mean > kRoundoffSteps * std::numeric_limits<double>::epsilon() * t_scale)) {
+      why = fmt::format("its mean step is below {:.0f} ulps of the run's time {:.3g} s",
+                        kRoundoffSteps, t_scale);
+    } else if (over_windows_ > kCollapseWindows && h_mean * kCollapseFall <= oldest) {
+      why = fmt::format("the mean step fell from {:.3g} s over the last {} windows of {} steps",
+                        oldest, kCollapseWindows, kCheckSteps);
+    } else {
+      return false;  // small steps, not (yet) a collapse: the onset of rolling, an impact
+    }
+  }
   fail(Termination::StepCollapse,
        fmt::format("the step size collapsed at t = {:.17g}: {} steps advanced {:.3g} s (mean "
                    "step {:.3g} s), so the {:.3g} s left would take {:.3g} steps, above the limit "
-                   "of {:.3g}; likely a stiff or degenerate parameter (a tiny inertia, a huge "
-                   "stiffness, load, length or speed)",
-                   t, dn, dt, h_mean, remaining, need, kMaxRunSteps));
+                   "of {:.3g}, and {}; likely a stiff or degenerate parameter (a tiny inertia, a "
+                   "huge stiffness, load, length or speed)",
+                   t, dn, dt, h_mean, remaining, need, kMaxRunSteps, why));
   return true;
 }
 

@@ -89,9 +89,15 @@ std::string file_text(const std::string& path) {
   return ss.str();
 }
 
-/// --resume: the folder holds a complete run of exactly this resolved case.
+/// --resume: the folder holds a complete run of exactly this resolved case, its matrices' content
+/// included (the copies of a matrices case's files beside case.resolved.toml: a matrix file
+/// changed since is another case).
 bool already_done(const CaseSpec& spec, const std::string& dir) {
-  return run_complete(dir) && file_text(dir + "/case.resolved.toml") == to_toml(spec);
+  if (!run_complete(dir) || file_text(dir + "/case.resolved.toml") != resolved_toml(spec))
+    return false;
+  for (const auto& [name, bytes] : case_matrix_files(spec))
+    if (file_text(dir + "/" + name) != bytes) return false;
+  return true;
 }
 
 /// One run into `dir`. `own` is the worker's stop flag: raised by the sweep's stop (SIGINT,
@@ -203,12 +209,18 @@ std::string fnv1a64(std::string_view text) {
   return fmt::format("{:016x}", h);
 }
 
-/// The plan hash: every point's resolved case (varied keys included, in point order) and every
-/// option that changes what a row says. The shard count is not in it (sweep-merge checks it).
+/// The plan hash: every point's resolved case (varied keys included, in point order) with the
+/// content of its matrices (kind "matrices": the hash of each copy a run folder holds, so that
+/// shards computed with different matrix files do not merge), and every option that changes what
+/// a row says. The shard count is not in it (sweep-merge checks it).
 std::string plan_hash(const std::vector<CaseSpec>& specs, const SweepOptions& o, int members) {
   std::string text = "rubdyn sweep plan 1\n";
   for (const auto& v : o.vary) text += fmt::format("vary {} {}\n", v.key, v.values.size());
-  for (const auto& c : specs) text += to_toml(c) + "\n--\n";
+  for (const auto& c : specs) {
+    text += resolved_toml(c) + "\n--\n";
+    for (const auto& [name, bytes] : case_matrix_files(c))
+      text += fmt::format("{} {}\n", name, fnv1a64(bytes));
+  }
   const AnalysisOptions& a = o.analysis;
   text += fmt::format("certify {}\nensemble {} {:.17g} {:.17g}\n", o.certify, members,
                       o.ensemble.domega, o.ensemble.offset);

@@ -506,7 +506,8 @@ std::string node_text(const toml::node& n) {
 
 class Loader {
  public:
-  explicit Loader(std::string source) : source_(std::move(source)) {}
+  explicit Loader(std::string source, MatrixSnapshot* snapshot = nullptr)
+      : source_(std::move(source)), snapshot_(snapshot) {}
 
   CaseSpec load(std::string_view text, const std::vector<std::string>& overrides) {
     toml::table doc;
@@ -534,6 +535,7 @@ class Loader {
     // Rules run even when other keys have problems, so that every problem is reported at once.
     // A key that is missing or of the wrong type keeps its (valid) default and so adds nothing.
     if (model_known_) check_rules(c);
+    if (issues_.empty()) resolved_size_rule(c);
     if (!issues_.empty()) throw CaseError(issues_);
     return c;
   }
@@ -725,6 +727,7 @@ class Loader {
     for (const auto& [k, node] : doc) {
       const std::string key(k.str());
       if (key == "name") {
+        name_line_ = static_cast<int>(node.source().begin.line);
         if (auto s = node.as_string()) {
           c.name = s->get();
         } else {
@@ -985,6 +988,32 @@ class Loader {
     }
   }
 
+  /// A run writes the case back as case.resolved.toml (every default filled in, strings
+  /// escaped), which `rubdyn analyze`, `run --from` and rubdyn.read read as a case file: it must
+  /// be one, of at most kMaxCaseBytes. A case whose resolved form is larger (a string of 900 kB,
+  /// whose escapes grow it) is refused here, before anything runs, naming its longest string.
+  void resolved_size_rule(const CaseSpec& c) {
+    const std::size_t size = resolved_toml(c).size();
+    if (size <= kMaxCaseBytes) return;
+    std::string key = "name";
+    std::size_t longest = c.name.size();
+    for (const CaseEntry& e : case_values(c)) {
+      const std::string* text = std::get_if<std::string>(&e.value);
+      if (text && text->size() > longest) {
+        longest = text->size();
+        key = e.full();
+      }
+    }
+    const toml::node* n = at(key);
+    const Origin o = key == "name" ? Origin{source_, name_line_} : origin(key, n);
+    issues_.push_back(
+        {o.file, o.line, key, fmt::format("(a string of {} bytes)", longest),
+         fmt::format("case.resolved.toml, which a run writes and `rubdyn analyze`, `run --from` "
+                     "and rubdyn.read read back as a case file, would hold {} bytes, above the "
+                     "{} bytes a case file may have: shorten this string",
+                     size, kMaxCaseBytes)});
+  }
+
   /// Quantities derived from valid values must be finite too: the initial state's mechanical
   /// energy and its contact kinematics (gap, gap rate, slip speed R_r omega + ...). An overflow
   /// there (omega0 = 1e308, radius = 1e308) would only give non-finite numbers in the output.
@@ -1170,7 +1199,14 @@ class Loader {
       path = (ec ? p : abs).lexically_normal().string();
       read_early_.insert(key);
       try {
-        m = read_matrix_file(path);
+        // a snapshot holds the file as it was when the case was first made (MatrixSnapshot)
+        const auto held = snapshot_ ? snapshot_->find(path) : MatrixSnapshot::iterator();
+        if (snapshot_ && held != snapshot_->end()) {
+          m = held->second;
+        } else {
+          m = read_matrix_file(path);
+          if (snapshot_) snapshot_->emplace(path, m);
+        }
       } catch (const MatrixFileError& e) {
         pend(key, n, toml_quote(given), fmt::format("the file {}: {}", path, e.what()));
         return nullptr;
@@ -1307,7 +1343,10 @@ class Loader {
       }
     }
     if (!matrices_ok_) {
-      // the coordinates of what could be read (so that [initial] is still checked)
+      // the coordinates of what could be read (so that [initial] is still checked): rotor.M's
+      // size, or without it as many as rotor.coordinates names (so that [initial] keys of
+      // those names are not reported as another model's)
+      if (n < 0 && !names.empty()) n = static_cast<long>(names.size());
       r.M.resize(n >= 0 ? n : 0, n >= 0 ? n : 0);
       r.names = names;
       return;
@@ -1468,6 +1507,8 @@ class Loader {
   }
 
   std::string source_;
+  MatrixSnapshot* snapshot_ = nullptr;  // kind "matrices": files as first read (case_io.hpp)
+  int name_line_ = 0;                   // the line of the top-level `name`
   std::vector<CaseIssue> issues_;
   std::set<std::string> overridden_;
   std::map<std::string, const toml::node*> present_;
@@ -1485,8 +1526,8 @@ class Loader {
 }  // namespace
 
 CaseSpec parse_case(std::string_view toml_text, const std::string& source,
-                    const std::vector<std::string>& overrides) {
-  return Loader(source).load(toml_text, overrides);
+                    const std::vector<std::string>& overrides, MatrixSnapshot* snapshot) {
+  return Loader(source, snapshot).load(toml_text, overrides);
 }
 
 CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides) {

@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "rubdyn/io/text_files.hpp"
@@ -185,6 +186,30 @@ Mat parse_matrix(const std::string& bytes, bool npy) {
 
 Mat read_matrix_file(const std::string& path) {
   return parse_matrix(read_bytes(path), ends_with(path, ".npy"));
+}
+
+std::string npy_bytes(const Mat& m, bool column) {
+  const std::string shape = column && m.cols() == 1 ? fmt::format("({},)", m.rows())
+                                                    : fmt::format("({}, {})", m.rows(), m.cols());
+  std::string header =
+      fmt::format("{{'descr': '<f8', 'fortran_order': False, 'shape': {}, }}", shape);
+  // numpy pads the header with spaces and a line end so that the data start on a multiple of
+  // 64 bytes (10 bytes of magic, version and length before it)
+  header.append(63 - (10 + header.size()) % 64, ' ');
+  header += '\n';
+  std::string out("\x93NUMPY\x01\x00", 8);
+  out += static_cast<char>(header.size() & 0xff);
+  out += static_cast<char>((header.size() >> 8) & 0xff);
+  out += header;
+  out.reserve(out.size() + 8 * static_cast<std::size_t>(m.size()));
+  for (Eigen::Index i = 0; i < m.rows(); ++i)
+    for (Eigen::Index j = 0; j < m.cols(); ++j) {
+      std::uint64_t bits = 0;
+      const double x = m(i, j);
+      std::memcpy(&bits, &x, sizeof x);
+      for (int b = 0; b < 8; ++b) out += static_cast<char>((bits >> (8 * b)) & 0xff);
+    }
+  return out;
 }
 
 }  // namespace rubdyn

@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -16,10 +17,16 @@
 #include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/io/output_folder.hpp"
 #include "rubdyn/io/text_files.hpp"
+#include "rubdyn/model/matrix_model.hpp"
+#include "rubdyn/model/rotor_stator_params.hpp"
 
 namespace rubdyn {
 
 namespace {
+
+/// The most contacts of any model (the rigid rotor's [[plane]]s, a matrices model's
+/// [[contact_node]]s): the planes whose derived files a new run removes.
+constexpr int kMaxDerivedPlanes = std::max(kMaxPlanes, kMaxContactNodes);
 
 /// "cannot write PATH: reason", the reason from errno (set by the failed call).
 std::string cannot_write(const std::string& path) {
@@ -143,11 +150,29 @@ OutputFolder::OutputFolder(const std::string& dir, const CaseSpec& spec, std::at
   }
   if (::unlinkat(fd, "summary.json", 0) != 0 && errno != ENOENT)
     fail(fmt::format("cannot remove the old {}/summary.json: {}", dir, std::strerror(errno)));
-  struct stat an {};
-  const bool analysis_dir =
-      ::fstatat(fd, "analysis", &an, AT_SYMLINK_NOFOLLOW) == 0 && S_ISDIR(an.st_mode);
-  for (const std::string name : kDerivedFiles) {
-    if (name.starts_with("analysis/") && !analysis_dir) continue;  // never through a link
+  // a folder of derived files is entered only when it is a real folder (never through a link)
+  const auto real_dir = [fd](const std::string& name) {
+    struct stat st {};
+    return ::fstatat(fd, name.c_str(), &st, AT_SYMLINK_NOFOLLOW) == 0 && S_ISDIR(st.st_mode);
+  };
+  const bool analysis_dir = real_dir("analysis");
+  // an earlier run's copies of its matrix files that this case does not write
+  const auto matrices = case_matrix_files(spec);
+  std::vector<std::string> stale;
+  for (const char* key : kCaseMatrixKeys) {
+    const std::string name = case_matrix_file(key);
+    if (std::none_of(matrices.begin(), matrices.end(),
+                     [&](const auto& m) { return m.first == name; }))
+      stale.push_back(name);
+  }
+  std::vector<std::string> removable = derived_files();
+  removable.insert(removable.end(), stale.begin(), stale.end());
+  for (const std::string& name : removable) {
+    if (name.starts_with("analysis/")) {
+      if (!analysis_dir) continue;
+      const auto slash = name.rfind('/');
+      if (slash > 8 && !real_dir(name.substr(0, slash))) continue;  // analysis/plane_k
+    }
     struct stat st {};
     if (::fstatat(fd, name.c_str(), &st, AT_SYMLINK_NOFOLLOW) != 0 || !S_ISREG(st.st_mode))
       continue;
@@ -155,9 +180,14 @@ OutputFolder::OutputFolder(const std::string& dir, const CaseSpec& spec, std::at
       fail(fmt::format("cannot remove {}/{} (derived from an earlier run in this folder): {}", dir,
                        name, std::strerror(errno)));
   }
-  if (analysis_dir) ::unlinkat(fd, "analysis", AT_REMOVEDIR);  // only when empty: kept otherwise
+  // the folders, innermost first, only when that left them empty: kept otherwise
+  if (analysis_dir)
+    for (const std::string& name : derived_folders())
+      if (real_dir(name)) ::unlinkat(fd, name.c_str(), AT_REMOVEDIR);
   try {
-    write_file_at(fd, "case.resolved.toml", dir + "/case.resolved.toml", to_toml(spec));
+    // the matrices first: a case.resolved.toml on disk always has its files beside it
+    for (const auto& [name, bytes] : matrices) write_file_at(fd, name, dir + "/" + name, bytes);
+    write_file_at(fd, "case.resolved.toml", dir + "/case.resolved.toml", resolved_toml(spec));
     ts_ = open_output_stream_at(fd, "timeseries.csv", dir + "/timeseries.csv");
     ev_ = open_output_stream_at(fd, "events.csv", dir + "/events.csv");
     std::string header, ev_header;
@@ -282,6 +312,25 @@ void OutputFolder::end(const RunSummary& s) {
     }
     throw OutputError(error_ + "; " + e.what());
   }
+}
+
+std::vector<std::string> derived_files() {
+  std::vector<std::string> out;
+  // analysis/plane_k/ of every plane k >= 2 first, then analysis/'s own and the figures
+  for (int k = 2; k <= kMaxDerivedPlanes; ++k)
+    for (const char* f : kPlaneAnalysisFiles)
+      out.push_back(fmt::format("analysis/plane_{}/{}", k, f));
+  for (const char* f : kDerivedFiles) out.emplace_back(f);
+  for (int k = 1; k <= kMaxDerivedPlanes; ++k)
+    for (const char* f : kPlaneFigures) out.push_back(fmt::format("{}_{}.png", f, k));
+  return out;
+}
+
+std::vector<std::string> derived_folders() {
+  std::vector<std::string> out;
+  for (int k = 2; k <= kMaxDerivedPlanes; ++k) out.push_back(fmt::format("analysis/plane_{}", k));
+  out.emplace_back("analysis");
+  return out;
 }
 
 std::string summary_json(const RunSummary& s) {

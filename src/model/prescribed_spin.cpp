@@ -38,6 +38,26 @@ PrescribedSpin::PrescribedSpin(std::unique_ptr<LagrangianModel> inner, double t0
   n_ = inner_->num_dofs() - 1;
   for (int i = 0; i <= n_; ++i)
     if (i != s_) coords_.push_back(inner_->coordinates()[static_cast<std::size_t>(i)]);
+  // the inner K-contact chart with the spin dropped: every index above s_ moves down by one; a
+  // point or ring that involves the spin cannot be charted (it would move with theta(t))
+  if (const RingChart* inner_chart = inner_->ring_chart()) {
+    std::vector<RingContact> rc = inner_chart->contacts();
+    bool ok = true;
+    const auto shift = [&](int& i) {
+      if (i < 0) return;
+      if (i == s_) ok = false;
+      if (i > s_) --i;
+    };
+    for (RingContact& c : rc) {
+      for (std::size_t j = 0; j < 2; ++j) {
+        shift(c.ix[j]);
+        shift(c.iy[j]);
+      }
+      if (c.ring >= 0 && (c.ring == s_ || c.ring + 1 == s_)) ok = false;
+      shift(c.ring);
+    }
+    if (ok) ring_chart_.emplace(n_, -1, std::move(rc));  // no spin: sliding contacts only
+  }
 }
 
 double PrescribedSpin::theta(double t) const {
@@ -170,6 +190,12 @@ void PrescribedSpin::compute_contact(int k, double t, VecIn q, VecIn v,
   c.wdot_N = s.cf.wdot_N + wn * alpha_;
   c.wdot_T = s.cf.wdot_T + wt * alpha_;
   c.normal_defined = s.cf.normal_defined;
+}
+
+bool PrescribedSpin::plane_motion(int k, double t, VecIn q, VecIn v, PlaneMotion& out) const {
+  Scratch& s = scratch();
+  embed(t, q, v, s);
+  return inner_->plane_motion(k, t, s.qf, s.vf, out);
 }
 
 double PrescribedSpin::kinetic_energy(double t, VecIn q, VecIn v) const {

@@ -128,7 +128,7 @@ class Carpenter final : public Stepper {
   /// prediction penetrates; solve_mbar(b, x) sets x = M-bar^{-1} b. kin_ready: kin_ already
   /// holds the kinematics at the prediction (q_i + dd, central velocity).
   template <class SolveMbar>
-  void correct(V& dd, const SolveMbar& solve_mbar, double& FN, double& FT, Phase& ph,
+  void correct(double t, V& dd, const SolveMbar& solve_mbar, double& FN, double& FT, Phase& ph,
                bool kin_ready = false);
 
   const LagrangianModel& m_;
@@ -153,9 +153,10 @@ class Carpenter final : public Stepper {
   /// Multi: the correction of dd for every contact that the prediction penetrates, jointly
   /// (docs/time-steppers.md, 3.1); kin_ready: mw_.kin holds the prediction's kinematics.
   template <class SolveMbar>
-  void correct_multi(V& dd, const SolveMbar& solve_mbar, bool kin_ready = false);
-  /// Multi: the kinematics of every contact at the prediction q_i + dd; true if one penetrates.
-  bool predict_contacts(const V& dd);
+  void correct_multi(double t, V& dd, const SolveMbar& solve_mbar, bool kin_ready = false);
+  /// Multi: the kinematics of every contact at the prediction q_i + dd (with the central
+  /// velocity, at t = t_i, where the multiplier acts); true if one penetrates.
+  bool predict_contacts(double t, const V& dd);
 };
 
 template <int N, bool Multi>
@@ -177,13 +178,15 @@ void Carpenter<N, Multi>::residual(double t, const V& d, bool with_jacobians) {
 
 template <int N, bool Multi>
 template <class SolveMbar>
-void Carpenter<N, Multi>::correct(V& dd, const SolveMbar& solve_mbar, double& FN, double& FT,
-                                  Phase& ph, bool kin_ready) {
+void Carpenter<N, Multi>::correct(double t, V& dd, const SolveMbar& solve_mbar, double& FN,
+                                  double& FT, Phase& ph, bool kin_ready) {
   const double h = o_.h;
   if (!kin_ready) {
     qp_ = q_ + dd;
     vc_ = (dd + dq_prev_) / (2.0 * h);
-    m_.compute_contact(0, 0.0, qp_, vc_, kin_);
+    // at t_i (not 0: a prescribed spin's share of the slip speed, b_T = -R omega(t), sets the
+    // friction's direction)
+    m_.compute_contact(0, t, qp_, vc_, kin_);
   }
   const ContactKinematics& c = kin_;
   FN = FT = 0.0;
@@ -206,13 +209,13 @@ void Carpenter<N, Multi>::correct(V& dd, const SolveMbar& solve_mbar, double& FN
 }
 
 template <int N, bool Multi>
-bool Carpenter<N, Multi>::predict_contacts(const V& dd) {
+bool Carpenter<N, Multi>::predict_contacts(double t, const V& dd) {
   qp_ = q_ + dd;
   vc_ = (dd + dq_prev_) / (2.0 * o_.h);
   bool any = false;
   for (int k = 0; k < K_; ++k) {
     ContactKinematics& c = mw_.kin[static_cast<std::size_t>(k)];
-    m_.compute_contact(k, 0.0, qp_, vc_, c);
+    m_.compute_contact(k, t, qp_, vc_, c);
     any = any || c.d_N < 0.0;
   }
   return any;
@@ -220,13 +223,14 @@ bool Carpenter<N, Multi>::predict_contacts(const V& dd) {
 
 template <int N, bool Multi>
 template <class SolveMbar>
-void Carpenter<N, Multi>::correct_multi(V& dd, const SolveMbar& solve_mbar, bool kin_ready) {
+void Carpenter<N, Multi>::correct_multi(double t, V& dd, const SolveMbar& solve_mbar,
+                                        bool kin_ready) {
   // One multiplier per penetrating contact along its C_NT,k = W_N,k - mu_k s_k W_T,k (s_k the
   // sign of its slip at the prediction), all found together: d_N,j(q^p) + sum_k W_N,j^T
   // M-bar^-1 C_NT,k F_k = 0 over the set; a contact whose F comes out negative leaves the set
   // (the most negative first) and the rest is solved again.
   auto& w = mw_;
-  if (!kin_ready) predict_contacts(dd);
+  if (!kin_ready) predict_contacts(t, dd);
   w.pen.clear();
   for (int k = 0; k < K_; ++k) {
     const auto ik = static_cast<std::size_t>(k);
@@ -282,9 +286,16 @@ StepOutcome Carpenter<N, Multi>::step(double t, StepReport& r, std::string& mess
   const double h = o_.h, h2 = h * h;
   if constexpr (Multi) {
     for (int k = 0; k < K_; ++k) {
+      const auto ik = static_cast<std::size_t>(k);
       m_.compute_contact(k, t, q_, v_, kin_);
-      mw_.vN0[static_cast<std::size_t>(k)] = kin_.v_N;
+      mw_.vN0[ik] = kin_.v_N;
+      // no force until this step's correction finds one: carp-onevc corrects only when the
+      // prediction penetrates, and a step without correction must not report (nor book the
+      // work of) the forces of the last step that had one
+      mw_.FN[ik] = mw_.FT[ik] = 0.0;
+      mw_.phase[ik] = Phase::Free;
     }
+    mw_.pen.clear();
   } else {
     m_.compute_contact(0, t, q_, v_, kin_);
   }
@@ -326,7 +337,7 @@ StepOutcome Carpenter<N, Multi>::step(double t, StepReport& r, std::string& mess
     // when the prediction penetrates.
     bool penetrates = false;
     if constexpr (Multi) {
-      penetrates = predict_contacts(d);
+      penetrates = predict_contacts(t, d);
     } else {
       qp_ = q_ + d;
       vc_ = (d + dq_prev_) / (2.0 * h);
@@ -349,9 +360,9 @@ StepOutcome Carpenter<N, Multi>::step(double t, StepReport& r, std::string& mess
         }
       };
       if constexpr (Multi) {
-        correct_multi(d, solve_mbar, true);
+        correct_multi(t, d, solve_mbar, true);
       } else {
-        correct(d, solve_mbar, FN, FT, ph, true);
+        correct(t, d, solve_mbar, FN, FT, ph, true);
       }
     }
   } else {
@@ -367,9 +378,9 @@ StepOutcome Carpenter<N, Multi>::step(double t, StepReport& r, std::string& mess
       dn_ = d - step_;
       auto solve_mbar = [this](const V& b, V& x) { x = lu_.solve(b); };
       if constexpr (Multi) {
-        correct_multi(dn_, solve_mbar);
+        correct_multi(t, dn_, solve_mbar);
       } else {
-        correct(dn_, solve_mbar, FN, FT, ph);
+        correct(t, dn_, solve_mbar, FN, FT, ph);
       }
       step_ = dn_ - d;  // the change of the iterate
       d = dn_;
@@ -404,6 +415,16 @@ StepOutcome Carpenter<N, Multi>::step(double t, StepReport& r, std::string& mess
   }
   // the state at t_i with its central velocity; then q_{i+1} = q_i + Delta
   v_ = (d + dq_prev_) / (2.0 * h);
+  // The work of a contact's force over the step: the force the correction applied, C_NT F_N =
+  // W_N F_N + W_T F_T with W_N, W_T at the prediction (the kinematics `c` it was found with),
+  // along the central velocity. It is exact: with M (Delta_{i+1} - Delta_i) / h^2 = f + C_NT F_N,
+  // the work (C_NT F_N)^T v_i h is the change of the half-step kinetic energy the force causes.
+  // (The kinematics at q_i instead rotate the force by the step's turn of the normal: with the
+  // rotor thrown at 20 m/s into a ring of 1e-4 m clearance, 4.2e3 J of 2.9e4 J went unbooked.)
+  const auto work = [&](const ContactKinematics& c, double F_N, double F_T) {
+    const double v_N = c.W_N.dot(v_) + c.b_N, v_t = c.W_T.dot(v_) + c.b_T;
+    return (F_N * v_N + F_T * v_t) * h;
+  };
   r.index = index_++;
   r.q = q_;
   r.v = v_;
@@ -423,14 +444,10 @@ StepOutcome Carpenter<N, Multi>::step(double t, StepReport& r, std::string& mess
       cs.P_T = mw_.FT[ik] * h;
       cs.phase = mw_.phase[ik];
       cs.v_N_before = mw_.vN0[ik];
-      if (mw_.FN[ik] != 0.0) {
-        m_.compute_contact(k, t, q_, v_, kin_);
-        r.contact_work += (mw_.FN[ik] * kin_.v_N + mw_.FT[ik] * kin_.v_t) * h;
-      }
+      if (mw_.FN[ik] != 0.0) r.contact_work += work(mw_.kin[ik], mw_.FN[ik], mw_.FT[ik]);
     }
   } else if (FN != 0.0) {
-    m_.compute_contact(0, t, q_, v_, kin_);
-    r.contact_work = (FN * kin_.v_N + FT * kin_.v_t) * h;
+    r.contact_work = work(kin_, FN, FT);
   }
   r.a = (d - dq_prev_) / h2;
   if (spin_ >= 0) {

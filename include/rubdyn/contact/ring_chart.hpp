@@ -66,6 +66,8 @@ class RingChart {
   RingChart(int n, int spin, std::vector<RingContact> contacts);
 
   int contact_count() const { return static_cast<int>(c_.size()); }
+  /// Every contact's geometry, as given (a wrapper of the model builds its own chart from them).
+  const std::vector<RingContact>& contacts() const { return c_; }
   /// Which coordinates the closed contacts of a mode tuple eliminate (built on the stack by
   /// plan(): no allocation).
   struct Plan {

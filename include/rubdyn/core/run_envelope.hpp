@@ -7,6 +7,7 @@
 // energy balance, monitor, wall time) by handing the summary to the sink.
 // How a solver produces its samples (dense output on a grid, or the first step end past each
 // grid point) stays its own; the output grid t_start + k output_dt is the envelope's.
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -34,17 +35,38 @@ struct RunControls {
   double max_wall = 0.0;
 };
 
-/// The step-rate guard of a run with error control (the event-driven integrator): when, at the
-/// mean step size of its last kCheckSteps steps, the run would need more than kMaxRunSteps
-/// steps in all, its step size has collapsed (a stiff or degenerate parameter: a tiny inertia, a
-/// huge stiffness, load or speed) and it ends with Termination::StepCollapse. The same bound as
-/// kMaxFixedSteps (stepping/fixed_step.hpp), which a fixed-step run may not exceed either: at
-/// about 1 us a step, a quarter of an hour of integration.
+/// The step-rate guard of a run with error control (the event-driven integrator). The steps are
+/// watched in windows of kCheckSteps steps; a window is over the bound when, at its mean step
+/// size, the run would need more than kMaxRunSteps steps in all. One such window proves nothing,
+/// nor do many at a steady step: the onset of rolling at mu = 0.25 on the reference case holds
+/// the step at 8e-8 s for 1e5 steps (about 100 windows, each over the bound of a 100 s run) before
+/// it grows with the falling spin, and the run needs 2e7 steps for 28 s of rolling. A collapse (a
+/// stiff or degenerate parameter: a tiny inertia, a huge stiffness, load or speed) is judged by
+/// its persistence, and the run then ends with Termination::StepCollapse:
+/// - a falling step: kCollapseWindows consecutive windows over the bound, the mean step of the
+///   last at most 1 / kCollapseFall of the first's;
+/// - a step below round-off: a window over the bound whose mean step is below kRoundoffSteps
+///   ulps of the time the run must reach, max(|t|, |t_end|): there the time itself carries a
+///   relative error of a percent per step (rotor.L = 1e30: 8e-20 s steps in a run of 1 ms);
+/// - and in any case a run that has taken kMaxRunSteps steps: the bound of kMaxFixedSteps
+///   (stepping/fixed_step.hpp), which a fixed-step run may not exceed either (at about 1 us a
+///   step, a quarter of an hour of integration), so that every run ends in bounded time.
 inline constexpr double kMaxRunSteps = 1e9;
 /// Integrator steps between two readings of the clock (the wall-time budget) and of the step
-/// rate. The event-driven integrator hands control back to its loop at least this often (a CVODE
-/// call takes at most this many steps), so that the stop flag is seen between steps too.
+/// rate: one window of the step-rate guard. The event-driven integrator hands control back to
+/// its loop at least this often (a CVODE call takes at most this many steps), so that the stop
+/// flag is seen between steps too.
 inline constexpr long kCheckSteps = 1000;
+/// Consecutive windows over the bound over which a falling step is judged (1e4 steps: a
+/// hundredth of a second of wall time at 1 us a step).
+inline constexpr int kCollapseWindows = 10;
+/// How much the mean step must fall over kCollapseWindows windows to be a collapse: an order of
+/// magnitude (the mean step of a steady phase scatters by tens of percent between windows; a
+/// collapsing one falls geometrically, 1e-19 s within a few windows with rotor.L = 1e30).
+inline constexpr double kCollapseFall = 10.0;
+/// A window's mean step below this many ulps of the run's time (kRoundoffSteps x eps x
+/// max(|t|, |t_end|)) is a collapse at once.
+inline constexpr double kRoundoffSteps = 100.0;
 
 /// The largest contact speed |v_N|, |v_t| [m/s] a run may reach. A rigid-body model assumes
 /// that a push at the contact is felt at once by the whole rotor; elastic waves carry it at
@@ -152,8 +174,9 @@ class RunEnvelope {
   bool budget_spent(double t);
   /// Between integrator steps of a run with error control, with `steps` its steps so far and t
   /// the end of the last: the stop flag at every call; every kCheckSteps steps the wall-time
-  /// budget and the step-rate guard (kMaxRunSteps: Termination::StepCollapse, with the step
-  /// size and the likely cause). True: stop now. Reads the clock once per kCheckSteps steps.
+  /// budget and the step-rate guard (a persistent collapse, see kMaxRunSteps:
+  /// Termination::StepCollapse, with the step size and the likely cause). True: stop now. Reads
+  /// the clock once per kCheckSteps steps.
   bool watch(double t, long steps) {
     if (stop_requested(t)) return true;
     if (steps - check_steps_ < kCheckSteps) return false;
@@ -182,6 +205,10 @@ class RunEnvelope {
   Plausibility plaus_;
   double check_t_ = 0.0;  // the step-rate guard's last check: time and steps
   long check_steps_ = 0;
+  // the step-rate guard's recent windows: mean steps, newest at over_h_[over_windows_ % N], and
+  // how many consecutive windows were over the bound (kMaxRunSteps)
+  std::array<double, kCollapseWindows> over_h_{};
+  long over_windows_ = 0;
   double last_output_t_ = std::numeric_limits<double>::quiet_NaN();
 };
 

@@ -6,8 +6,10 @@
 // errors (a typo is never silently ignored); so are missing required keys, wrong types and
 // non-finite numbers. Overrides "section.key=value" (CLI --set) are applied on top of the file and
 // validated the same way (their issues name "--set" as the file).
+#include <map>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -24,16 +26,42 @@ inline constexpr long kMaxOutputRows = 100'000'000;
 /// read without end.
 inline constexpr std::size_t kMaxCaseBytes = 1 << 20;
 
+/// The matrices a case of kind "matrices" read, by the path of their file as resolved
+/// (absolute), as the file held them. A case parsed with a snapshot takes a file found there
+/// instead of reading it again, and adds what it reads: a case made again from the same text
+/// (the Python Case with more overrides) is then a snapshot of its matrix files too.
+using MatrixSnapshot = std::map<std::string, Mat>;
+
 /// Reads, overrides, validates. Throws CaseError (every problem listed) on bad input.
 CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides = {});
 
-/// Same, from TOML text; `source` is the name used in messages (tests, stdin).
+/// Same, from TOML text; `source` is the name used in messages (tests, stdin) and the file whose
+/// folder relative matrix paths start from. With `snapshot`, matrix files are taken from it when
+/// there and added to it when read (MatrixSnapshot).
 CaseSpec parse_case(std::string_view toml_text, const std::string& source,
-                    const std::vector<std::string>& overrides = {});
+                    const std::vector<std::string>& overrides = {},
+                    MatrixSnapshot* snapshot = nullptr);
 
 /// The case as TOML with every default and override filled in (case.resolved.toml). Reading it
 /// back with parse_case gives the same CaseSpec (numbers are written with 17 significant digits).
 std::string to_toml(const CaseSpec& c);
+
+/// case.resolved.toml as a run folder holds it (output_folder.hpp): to_toml(c), with the matrix
+/// files of a case of kind "matrices" named by their copies beside it (case_matrix_files), so
+/// that the folder stands alone: it reads back after the folder is moved or copied and the
+/// original files are gone. For other kinds it is to_toml(c).
+std::string resolved_toml(const CaseSpec& c);
+
+/// The copies of a case's matrix files that a run folder holds beside case.resolved.toml: for
+/// each matrix the case read (kind "matrices": M, C, K, G, and f0 when given), its file name
+/// (case_matrix_file) and the matrix as .npy bytes, which read back bit for bit. Empty for other
+/// kinds. With resolved_toml, the whole identity of a run's case (what sweep --resume compares
+/// and the sweep plan hash holds): a matrix file changed on disk is another case.
+std::vector<std::pair<std::string, std::string>> case_matrix_files(const CaseSpec& c);
+/// The name of the copy of the matrix of rotor key `key` (M, C, K, G, f0): "case.<key>.npy".
+std::string case_matrix_file(std::string_view key);
+/// The rotor keys whose matrices a run folder may hold copies of, in the order written.
+inline constexpr const char* kCaseMatrixKeys[] = {"M", "C", "K", "G", "f0"};
 
 /// `text` as a TOML basic string, quotes included: ", \\ and every control character escaped,
 /// so that parsing it gives `text` back (case.resolved.toml, and --out / --set values that are

@@ -31,4 +31,9 @@ Mat read_matrix_file(const std::string& path);
 /// The same from the bytes of a file (`npy`: the NumPy format, else CSV).
 Mat parse_matrix(const std::string& bytes, bool npy);
 
+/// `m` as the bytes of a NumPy .npy file (format 1.0, '<f8', C order): shape (rows, cols), or
+/// (rows,) for a column when `column` (a load vector). read_matrix_file gives `m` back bit for
+/// bit (a run folder keeps the matrices its case read so, output_folder.hpp).
+std::string npy_bytes(const Mat& m, bool column = false);
+
 }  // namespace rubdyn

@@ -48,7 +48,8 @@ class FolderError : public std::runtime_error {
 /// Files derived from a run's output (relative to its folder): removed when a new run takes the
 /// folder, so that they never describe another run than the one beside them. Only regular files
 /// of these names are removed (a link or a folder of that name is left alone), and analysis/
-/// itself when that leaves it empty.
+/// itself when that leaves it empty. These are a one-plane run's; derived_files() adds those of
+/// every contact plane of a run with several.
 inline constexpr const char* kDerivedFiles[] = {"analysis/derived.csv",
                                                 "analysis/spectrum.csv",
                                                 "analysis/spectrogram.csv",
@@ -60,6 +61,20 @@ inline constexpr const char* kDerivedFiles[] = {"analysis/derived.csv",
                                                 "friction.png",
                                                 "timeline.png",
                                                 "spectrogram.png"};
+/// The files of one contact plane that `rubdyn analyze` writes into analysis/plane_k/ for planes
+/// k >= 2 (plane 1's are analysis/'s own).
+inline constexpr const char* kPlaneAnalysisFiles[] = {"derived.csv", "spectrum.csv",
+                                                      "spectrogram.csv", "campbell.csv"};
+/// The figures `python3 -m rubdyn.plot` draws per contact plane k of a run with several, as
+/// <name>_k.png (python/rubdyn/plot.py: write_all).
+inline constexpr const char* kPlaneFigures[] = {"orbit", "contact", "friction", "timeline",
+                                                "spectrogram"};
+/// Every file derived from a run, for runs with up to the most contacts any model takes (8):
+/// kDerivedFiles, analysis/plane_k/ (kPlaneAnalysisFiles) and <figure>_k.png (kPlaneFigures),
+/// in an order that empties each analysis/plane_k/ before analysis/.
+std::vector<std::string> derived_files();
+/// The folders of derived_files() that are removed when that leaves them empty, innermost first.
+std::vector<std::string> derived_folders();
 
 /// A folder held open for the object's life, to be locked (flock, advisory: released when the
 /// object goes) and written into by its descriptor.
@@ -90,9 +105,12 @@ class HeldFolder {
 class OutputFolder final : public OutputSink {
  public:
   /// Creates `dir` (and parents), locks it, checks that it can be written, removes an old
-  /// summary.json and the files derived from it (kDerivedFiles), writes case.resolved.toml,
-  /// opens the CSV files with headers. Throws FolderError naming the path if it cannot (then
-  /// nothing of this run was written). `stop`, when given, is set on the first failed write.
+  /// summary.json and the files derived from it (derived_files()), writes the case
+  /// (case.resolved.toml as resolved_toml gives it, beside it the copies of a matrices case's
+  /// matrix files, case_matrix_files, so that the folder stands alone; an earlier run's copies
+  /// that this case does not have are removed), opens the CSV files with headers. Throws
+  /// FolderError naming the path if it cannot (then nothing of this run was written). `stop`, when
+  /// given, is set on the first failed write.
   OutputFolder(const std::string& dir, const CaseSpec& spec, std::atomic<bool>* stop = nullptr);
   ~OutputFolder() override;
   OutputFolder(const OutputFolder&) = delete;

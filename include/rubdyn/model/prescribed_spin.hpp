@@ -21,9 +21,15 @@
 // energy balance (applied_power), and theta, omega, tau_d are the model's observables (output
 // columns theta, omega, drive_torque). The energies are the whole system's, the spin's kinetic
 // energy included.
-// The contact phases have no minimal coordinates here (the rolling constraint is rheonomic):
-// the event-driven integrator integrates them as the index-reduced DAE with projection.
+// Every service of the inner model is passed through in the wrapper's coordinates: the planes'
+// centres (plane_motion: a rigid rotor's [[plane]] point interpolates between B and R) and the
+// K-contact chart (ring_chart: the inner chart with the spin's index dropped, and no spin, so that
+// it charts sliding contacts only). Sticking contacts have no minimal coordinates here (the
+// rolling constraint ties the contact point to theta(t), a given function of time), nor has the
+// one-contact chart (contact_chart: its coordinates hold theta): the event-driven integrator
+// integrates those phases as the index-reduced DAE with projection.
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "rubdyn/model/lagrangian_model.hpp"
@@ -51,6 +57,8 @@ class PrescribedSpin final : public LagrangianModel {
   const ContactLaw& contact_law(int k = 0) const override { return inner_->contact_law(k); }
   double gap_scale(int k = 0) const override { return inner_->gap_scale(k); }
   double contact_radius(int k = 0) const override { return inner_->contact_radius(k); }
+  bool plane_motion(int k, double t, VecIn q, VecIn v, PlaneMotion& out) const override;
+  const RingChart* ring_chart() const override { return ring_chart_ ? &*ring_chart_ : nullptr; }
   double kinetic_energy(double t, VecIn q, VecIn v) const override;
   double potential_energy(double t, VecIn q) const override;
   SmoothPower smooth_power(double t, VecIn q, VecIn v) const override;
@@ -84,6 +92,9 @@ class PrescribedSpin final : public LagrangianModel {
   int n_;  // inner dofs - 1
   double t0_, theta0_, omega0_, alpha_;
   std::vector<Coordinate> coords_;
+  /// The inner model's K-contact chart in these coordinates (none when the inner has none, or
+  /// when a contact's point or ring involves the spin coordinate).
+  std::optional<RingChart> ring_chart_;
 };
 
 }  // namespace rubdyn
