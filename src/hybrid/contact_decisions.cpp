@@ -387,7 +387,10 @@ Transition ContactDecider::on_constraint(
   for (int k : idx) {
     if (next[k] == Phase::Free) {
       tr.arming.rate_deferred.set(k);
-      tr.arming.gap_banded.set(k, band_on_release.test(k));
+      // a release on the constraint (d_N within the integrator's position resolution) bands
+      // its onset witness: with projected positions d_N starts at +-round-off and would fire
+      // at once
+      tr.arming.gap_banded.set(k, band_on_release.test(k) || op.at(k).d_N <= tol(k).graze_tol);
     } else if (slipping(next[k]) && law(k).has_friction() &&
                std::abs(op.at(k).v_t) <= tol(k).v_tol) {
       tr.arming.slip_banded.set(k);

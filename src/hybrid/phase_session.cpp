@@ -118,7 +118,9 @@ PhaseSession::PhaseSession(const PhaseContext& ctx, const SessionSettings& s, Se
         dMa_.setZero(n_, n_);
         f_.setZero(n_);
         a_.setZero(n_);
-        ldlt_ = Eigen::LDLT<Mat>(n_);
+        // sized by a factorisation (Eigen's LDLT(n) leaves its info member uninitialised, and
+        // assigning that object reads it: UBSan's invalid enum load)
+        ldlt_.compute(Mat::Identity(n_, n_));
       }
       break;
     case SessionKind::Projected:
