@@ -59,33 +59,14 @@ struct Case {
   std::shared_ptr<MatrixSnapshot> matrices = std::make_shared<MatrixSnapshot>();
 };
 
-/// The text of a case file, read as load_case reads it (binary, at most kMaxCaseBytes + 1
-/// bytes); nullopt for whatever load_case refuses before parsing (a folder, an unreadable or
-/// too large file, NUL bytes).
-std::optional<std::string> case_text(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) return std::nullopt;
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return std::nullopt;
-  std::string text(kMaxCaseBytes + 1, '\0');
-  in.read(text.data(), static_cast<std::streamsize>(text.size()));
-  if (in.bad()) return std::nullopt;
-  text.resize(static_cast<std::size_t>(in.gcount()));
-  if (text.size() > kMaxCaseBytes || text.find('\0') != std::string::npos) return std::nullopt;
-  return text;
-}
-
 Case make_case_from_file(const std::string& path, const std::vector<std::string>& overrides) {
-  std::optional<std::string> text = case_text(path);
-  if (!text) {
-    load_case(path, overrides);  // throws the CLI's CaseError for this file
-    // it did not: the file changed between the two reads
-    throw CaseError({{path, 0, "(file)", "", "changed while it was read: load it again"}});
-  }
+  // read once, as the CLI reads it (io/case_io.hpp: a regular file or a FIFO, at most
+  // kMaxCaseBytes, no NUL byte; CaseError naming the file otherwise), then kept as the snapshot
+  std::string text = read_case_file(path);
   auto matrices = std::make_shared<MatrixSnapshot>();
   // what load_case does with the text
-  CaseSpec spec = parse_case(*text, path, overrides, matrices.get());
-  return Case{std::move(spec), path, std::move(*text), overrides, std::move(matrices)};
+  CaseSpec spec = parse_case(text, path, overrides, matrices.get());
+  return Case{std::move(spec), path, std::move(text), overrides, std::move(matrices)};
 }
 
 Case make_case_from_text(const std::string& text, const std::string& source,
@@ -546,10 +527,12 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "campbell",
       [](const Case& c, std::optional<double> omega_max, int points, bool damped) {
-        const auto lm = build_model(c.spec)->linearize(Linearization::Tied);
-        if (!lm) throw py::value_error("this case's model has no linearisation");
-        return campbell_dict(compute_campbell_diagram(*lm, omega_max.value_or(c.spec.run.omega_lim),
-                                                      points, damped));
+        // the CLI's linear model (tied, or free where no tied system exists); CaseError
+        const CampbellModel cm = campbell_model(c.spec);
+        py::dict d = campbell_dict(compute_campbell_diagram(
+            cm.lm, omega_max.value_or(c.spec.run.omega_lim), points, damped));
+        d["tied"] = cm.tied;
+        return d;
       },
       py::arg("case"), py::arg("omega_max") = py::none(), py::arg("points") = 201,
       py::arg("damped") = false);

@@ -198,7 +198,8 @@ def solvers():
 
 def campbell(case, omega_max=None, points=201, damped=False):
     """Campbell diagram of the coupled system (rubdyn campbell): dict of numpy arrays omega [rad/s],
-    f1b, f1f, f2b, f2f [Hz] (zeta_* when damped), labels_ok, and csv (campbell.csv's text)."""
+    f1b, f1f, f2b, f2f [Hz] (zeta_* when damped), labels_ok, csv (campbell.csv's text) and tied
+    (False: the free modes, drawn where no tied system exists, e.g. a fixed ring)."""
     if not isinstance(case, Case):
         case = load_case(_path(case, "campbell: case (a Case or a path)"))
     if omega_max is not None:

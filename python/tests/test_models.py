@@ -4,13 +4,14 @@ rigid rotor with an unbalance against validation/analytic's transcription of doc
 (both checked there against Lagrange's equations of T and V by complex-step derivatives)."""
 import math
 import os
+import shutil
 import sys
 
 import numpy as np
 import pytest
 
 import rubdyn
-from conftest import SOURCE
+from conftest import SOURCE, run_cli
 
 sys.path.insert(0, os.path.join(SOURCE, "validation", "analytic"))
 import reference_sim as rs  # noqa: E402
@@ -119,3 +120,56 @@ def test_jeffcott_linearisation_and_columns():
                     (keys["rotor.mass"] + keys["stator.mass"])) / (2 * math.pi)
     assert d["labels"] == ["f1b", "f1f"] and d["labels_ok"]
     assert np.allclose(d["f1b"], f_c, rtol=1e-12) and np.allclose(d["f1f"], f_c, rtol=1e-12)
+
+
+def test_campbell_of_a_rigid_stator_and_of_a_fixed_ring_is_the_clis(cli, tmp_path):
+    """Issue 34: rubdyn.campbell took the tied linearisation only: a Jeffcott rotor in a rigid
+    stator (tied: nothing left to vibrate, size 0) died with SIGSEGV, and a [[plane]] with a
+    fixed ring (no tied system) was refused although `rubdyn campbell` draws its free modes."""
+    keys = {k: v for k, v in JEFFCOTT.items()
+            if k not in ("stator.mass", "stator.k", "stator.c")}
+    keys["stator.rigid"] = True
+    case = case_from_keys(keys, "jeffcott")
+    d = rubdyn.campbell(case, points=3)
+    assert d["tied"] is False and d["labels"] == ["f1b", "f1f"] and d["labels_ok"]
+    # the rotor alone: sqrt(k_r / m_r) / 2 pi, forward = backward (rtol: the eigen solver's
+    # round-off, 1e-12 is far above it)
+    f_r = math.sqrt(keys["rotor.k"] / keys["rotor.mass"]) / (2 * math.pi)
+    assert np.allclose(d["f1b"], f_r, rtol=1e-12) and np.allclose(d["f1f"], f_r, rtol=1e-12)
+    # a fixed ring at plane 2: the CLI's campbell.csv, to the bit
+    text = open(os.path.join(SOURCE, "cases", "two-plane.toml")).read()
+    ring = "stator_mass  = 1.0\nstator_k     = 4.0e6\nstator_c     = 50.0\n"
+    assert ring in text
+    path = tmp_path / "fixed.toml"
+    path.write_text(text.replace(ring, "stator_rigid = true\n"))
+    d = rubdyn.campbell(rubdyn.load_case(path), points=7)
+    assert d["tied"] is False
+    p = run_cli(cli, "campbell", str(path), "--points", "7", "--out", str(tmp_path / "c"))
+    assert "no contact" in p.stdout
+    assert (tmp_path / "c" / "campbell.csv").read_text() == d["csv"]
+
+
+def test_campbell_of_an_odd_n_says_odd(tmp_path):
+    """Issue 34: a matrices rotor of odd size has no whirl pairs: the error says so."""
+    for name, rows in (("M.csv", "2,0,0\n0,2,0\n0,0,2\n"), ("Z.csv", "0,0,0\n0,0,0\n0,0,0\n"),
+                       ("K.csv", "1e6,0,0\n0,1e6,0\n0,0,1e6\n")):
+        (tmp_path / name).write_text(rows)
+    path = tmp_path / "odd.toml"
+    path.write_text('[model]\nkind = "matrices"\n[rotor]\nM = "M.csv"\nC = "Z.csv"\nK = "K.csv"\n'
+                    'G = "Z.csv"\nJp = 0.06\n[contact_node]\nx = 0\ny = 1\nradius = 0.05\n'
+                    'gap = 2e-4\n[stator]\nrigid = true\n[contact]\nmu = 0.1\n[loads]\ngravity = 0.0\ntorque = 1.0\n[run]\nt_end = 0.01\n'
+                    'omega_lim = 100.0\n')
+    with pytest.raises(rubdyn.CaseError, match=r"rotor.M = .*n = 3 is odd"):
+        rubdyn.campbell(rubdyn.load_case(path))
+
+
+def test_an_absurd_npy_shape_is_a_case_error_not_memory_error(tmp_path):
+    """Issue 34: a .npy header declaring 2^32 x 2^32 entries without data gave MemoryError."""
+    shutil.copytree(os.path.join(SOURCE, "cases", "matrices-paper"), tmp_path / "matrices-paper")
+    shutil.copy(os.path.join(SOURCE, "cases", "matrices-paper.toml"), tmp_path / "case.toml")
+    header = "{'descr': '<f8', 'fortran_order': False, 'shape': (4294967296, 4294967296), }"
+    header += " " * (63 - (10 + len(header)) % 64) + "\n"
+    (tmp_path / "huge.npy").write_bytes(b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little")
+                                        + header.encode())
+    with pytest.raises(rubdyn.CaseError, match=r"rotor.M = .*huge.npy.*declares"):
+        rubdyn.load_case(tmp_path / "case.toml", overrides={"rotor.M": "huge.npy"})

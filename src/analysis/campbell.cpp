@@ -9,9 +9,14 @@
 #include <cmath>
 #include <complex>
 #include <limits>
+#include <memory>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 
+#include "rubdyn/io/case_error.hpp"
+#include "rubdyn/io/case_spec.hpp"
+#include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/model/rotor_stator_model.hpp"
 
 namespace rubdyn {
@@ -35,7 +40,36 @@ struct Mode {
 
 }  // namespace
 
-CampbellSolver::CampbellSolver(const LinearModel& lm, bool damped) : lm_(lm), damped_(damped) {
+namespace {
+
+const LinearModel& whirling(const LinearModel& lm) {
+  const int n = lm.size();
+  if (n == 0 || lm.nodes.empty())
+    throw std::invalid_argument(
+        "Campbell diagram: the linear model has no coordinate or no (x, y) node: nothing whirls");
+  if (lm.M.rows() != n || lm.M.cols() != n || lm.K.rows() != n || lm.K.cols() != n ||
+      lm.G.rows() != n || lm.G.cols() != n || lm.D.rows() != n || lm.D.cols() != n)
+    throw std::invalid_argument(
+        "Campbell diagram: M, G, D, K are not n x n with n its coordinates");
+  for (const auto& [x, y] : lm.nodes)
+    if (x < 0 || x >= n || y < 0 || y >= n)
+      throw std::invalid_argument("Campbell diagram: a node's coordinate is not one of the model");
+  return lm;
+}
+
+LinearModel tied_rigid_rotor(const RotorStatorParams& p) {
+  std::optional<LinearModel> lm = RotorStatorModel(p).linearize(Linearization::Tied);
+  if (!lm)
+    throw std::invalid_argument(
+        "Campbell diagram: this rotor has no tied system (a fixed ring tied to the rotor is a "
+        "constraint)");
+  return std::move(*lm);
+}
+
+}  // namespace
+
+CampbellSolver::CampbellSolver(const LinearModel& lm, bool damped)
+    : lm_(whirling(lm)), damped_(damped) {
   const int n = lm_.size();
   if (!damped) lm_.D.setZero(n, n);
   // the whirl energies use the mass matrix among the nodes' x coordinates (isotropy: the same
@@ -61,7 +95,7 @@ CampbellSolver::CampbellSolver(const LinearModel& lm, bool damped) : lm_(lm), da
 }
 
 CampbellSolver::CampbellSolver(const RotorStatorParams& p, bool damped)
-    : CampbellSolver(*RotorStatorModel(p).linearize(Linearization::Tied), damped) {}
+    : CampbellSolver(tied_rigid_rotor(p), damped) {}
 
 std::vector<std::string> CampbellSolver::labels() const {
   std::vector<std::string> l;
@@ -211,8 +245,30 @@ CampbellDiagram compute_campbell_diagram(const LinearModel& lm, double omega_max
 
 CampbellDiagram compute_campbell_diagram(const RotorStatorParams& p, double omega_max, int points,
                                          bool damped) {
-  return compute_campbell_diagram(*RotorStatorModel(p).linearize(Linearization::Tied), omega_max,
-                                  points, damped);
+  return compute_campbell_diagram(tied_rigid_rotor(p), omega_max, points, damped);
+}
+
+CampbellModel campbell_model(const CaseSpec& spec) {
+  const std::unique_ptr<LagrangianModel> model = build_model(spec);
+  CampbellModel out;
+  std::optional<LinearModel> lm = model->linearize(Linearization::Tied);
+  if (!lm || lm->size() == 0) {
+    lm = model->linearize(Linearization::Free);
+    out.tied = false;
+  }
+  if (!lm || lm->size() == 0 || lm->nodes.empty()) {
+    if (spec.model == "matrices" && spec.matrices.rotor.size() % 2 != 0)
+      throw CaseError(
+          {{spec.source, 0, "rotor.M", spec.matrix_files.M,
+            fmt::format("a Campbell diagram labels each mode's whirl on (x, y) pairs of q's "
+                        "coordinates, (0, 1), (2, 3), ...: n = {} is odd, so this rotor has "
+                        "none (order q as pairs of x and y)",
+                        spec.matrices.rotor.size())}});
+    throw CaseError({{spec.source, 0, "model.kind", spec.model,
+                      "this model has no linearisation for a Campbell diagram"}});
+  }
+  out.lm = std::move(*lm);
+  return out;
 }
 
 std::string campbell_csv(const CampbellDiagram& d) {

@@ -43,9 +43,15 @@ DerivedQuantities compute_derived_quantities(const RotorStatorParams& p, double 
   d.q_static[YR] = d.y_r;
   d.q_static[YS] = d.y_s;
 
-  const CampbellPoint rest = CampbellSolver(p).solve(0.0);
-  d.f1 = rest.f1b;  // = f1f: double mode
-  d.f2 = rest.f2b;
+  // the tied system exists only when every ring is sprung: a fixed ring ([[plane]] with
+  // stator_rigid) tied to the rotor is a constraint, not a mass and spring (then NaN)
+  if (const auto tied = m.linearize(Linearization::Tied)) {
+    const CampbellPoint rest = CampbellSolver(*tied).solve(0.0);
+    d.f1 = rest.f1b;  // = f1f: double mode
+    d.f2 = rest.f2b;
+  } else {
+    d.f1 = d.f2 = std::numeric_limits<double>::quiet_NaN();
+  }
   const double two_pi = 2.0 * std::numbers::pi;
   d.f_stator = std::sqrt(p.stator.k / p.stator.mass) / two_pi;
   d.f_bearing_rotor = std::sqrt(p.bearing.k * d.M22 / (d.M11 * d.M22 - d.M12 * d.M12)) / two_pi;

@@ -64,20 +64,11 @@ int campbell_command(const CampbellArgs& a) {
   if (!bad.empty()) throw CaseError(bad);
 
   const double omega_max = a.omega_max_given ? a.omega_max : spec.run.omega_lim;
-  // the model's linearisation with the stator tied to the rotor (the paper's coupled system);
-  // a model whose tied system has nothing left to vibrate (a rigid stator pins the rotor) gives
-  // its free modes instead
-  const auto model = build_model(spec);
-  std::optional<LinearModel> lm = model->linearize(Linearization::Tied);
-  bool tied = true;
-  if (!lm || lm->size() == 0) {
-    lm = model->linearize(Linearization::Free);
-    tied = false;
-  }
-  if (!lm || lm->size() == 0) {
-    throw CaseError({{spec.source, 0, "model.kind", spec.model,
-                      "this model has no linearisation for a Campbell diagram"}});
-  }
+  // the model's linearisation with the stator tied to the rotor (the paper's coupled system),
+  // or its free modes where that does not exist (analysis/campbell.hpp); CaseError: exit 2
+  const CampbellModel cm = campbell_model(spec);
+  const LinearModel* lm = &cm.lm;
+  const bool tied = cm.tied;
   const CampbellDiagram d = compute_campbell_diagram(*lm, omega_max, a.points, a.damped);
 
   const std::string dir = a.out.empty() ? output_folder(spec) : a.out;

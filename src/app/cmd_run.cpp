@@ -43,10 +43,31 @@ struct RunArgs {
 /// every initial.* key, written in the shortest form that reads back to the same double (the
 /// samples carry 17 significant digits, so the state is exact). The sample is the one at `at`
 /// (the last of the rows at that time: after an event) or the last complete one.
+/// `plain`: the case without the restart (null when it does not validate: its own errors are
+/// reported then). A restart sets every coordinate of the case from the sample: the folder's run
+/// must be of the same model with the same coordinates, else refused (exit 2), never started
+/// with the case's values where the folder has none.
 std::vector<std::string> restart_overrides(const std::string& from,
-                                           const std::optional<std::string>& at) {
+                                           const std::optional<std::string>& at,
+                                           const CaseSpec* plain) {
   const RunRecord r = read_run(from);
   for (const auto& w : r.warnings) std::fprintf(stderr, "rubdyn run: warning: %s\n", w.c_str());
+  if (plain) {
+    const auto names = [](const CaseSpec& c) {
+      std::string t;
+      for (const auto& x : initial_coordinates(c)) t += (t.empty() ? "" : ", ") + x.name;
+      return t;
+    };
+    const std::string theirs = names(r.spec), ours = names(*plain);
+    if (r.spec.model != plain->model || theirs != ours)
+      throw CaseError(
+          {{"command line", 0, "--from", from,
+            fmt::format("holds a run of model '{}' with coordinates ({}), where the case is of "
+                        "model '{}' with coordinates ({}): a restart sets every coordinate from "
+                        "the sample, so the case must be of the folder's model and layout (its "
+                        "case.resolved.toml is one)",
+                        r.spec.model, theirs, plain->model, ours)}});
+  }
   if (r.samples.empty()) throw std::runtime_error("--from " + from + ": no samples to start from");
   const Sample* s = &r.samples.back();
   if (at) {
@@ -98,8 +119,18 @@ std::vector<std::string> restart_overrides(const std::string& from,
 int run_command(const RunArgs& a) {
   // Command-line solver options are overrides of the case's keys: validated like the file.
   // a restart's state first: an explicit --set of the same key wins
+  // the case file is read once (a FIFO, <(gen-case), can be read only once)
+  const std::string text = read_case_file(a.c.path);  // CaseError: exit 2
   std::vector<std::string> sets;
-  if (a.from) sets = restart_overrides(*a.from, a.at);
+  if (a.from) {
+    std::optional<CaseSpec> plain;
+    try {
+      plain = parse_case(text, a.c.path, a.c.sets);
+    } catch (const CaseError&) {
+      // reported by the load below, with the restart's keys
+    }
+    sets = restart_overrides(*a.from, a.at, plain ? &*plain : nullptr);
+  }
   sets.insert(sets.end(), a.c.sets.begin(), a.c.sets.end());
   if (a.solver) sets.push_back("solver.kind=" + toml_quote(*a.solver));
   if (a.method) sets.push_back("solver.method=" + toml_quote(*a.method));
@@ -115,7 +146,7 @@ int run_command(const RunArgs& a) {
     bad.push_back({"command line", 0, "--out", "", "an empty path is no output folder"});
   CaseSpec spec;
   try {
-    spec = load_case(a.c.path, sets);
+    spec = parse_case(text, a.c.path, sets);
   } catch (const CaseError& e) {
     bad.insert(bad.end(), e.issues().begin(), e.issues().end());
   }

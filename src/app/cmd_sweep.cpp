@@ -6,6 +6,7 @@
 #include <memory>
 #include <optional>
 #include <stdexcept>
+#include <string>
 #include <thread>
 
 #include "cli_common.hpp"
@@ -75,6 +76,18 @@ int sweep_command(const SweepArgs& a) {
   const auto rows = run_sweep(o);
   if (tty) std::fprintf(stderr, "\r%60s\r", "");
   long bad = 0, uncertified = 0, not_run = 0, bad_members = 0;
+  // the exit code of the worst point or member, as `run` (then `analyze`) would give it: a
+  // failed write 5, a point that could not be run or analysed ("error") 2, a numerical end 3
+  bool write_failed = false, errored = false;
+  const std::string output_failure(to_string(Termination::OutputFailure));
+  auto note = [&](const std::string& termination) {
+    write_failed = write_failed || termination == output_failure;
+    errored = errored || termination == "error";
+  };
+  for (const auto& r : rows) {
+    note(r.termination);
+    for (const auto& m : r.members) note(m.termination);
+  }
   for (const auto& r : rows) {
     if (r.termination == "not_run") {
       ++not_run;
@@ -106,8 +119,10 @@ int sweep_command(const SweepArgs& a) {
     std::fprintf(stderr,
                  "rubdyn sweep: interrupted; the table lists the points not run (not_run); "
                  "run the same command with --resume to complete it\n");
-    return kExitInterrupted;
+    return write_failed ? kExitOutput : kExitInterrupted;
   }
+  if (write_failed) return kExitOutput;
+  if (errored) return kExitBadInput;
   return bad + bad_members > 0 ? kExitEarlyEnd : kExitOk;
 }
 

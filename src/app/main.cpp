@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <string>
 
 #include "commands.hpp"
 #include "rubdyn/io/case_error.hpp"
@@ -29,6 +30,23 @@ int main(int argc, char** argv) {
   rubdyn::app::add_compare_command(app, action);
   rubdyn::app::add_analyze_command(app, action);
   rubdyn::app::add_sweep_commands(app, action);
+  // The first word that is no option names the subcommand: an unknown one is an error naming
+  // it, whatever follows (CLI11 would answer `rubdyn orbit --help` with the general help and
+  // exit 0, as if the command existed).
+  if (argc > 1 && argv[1][0] != '-') {
+    std::string names;
+    bool known = false;
+    for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+      known = known || sub->check_name(argv[1]);
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!known) {
+      std::fprintf(stderr,
+                   "rubdyn: error: '%s' is not a subcommand (subcommands: %s; rubdyn --help)\n",
+                   argv[1], names.c_str());
+      return rubdyn::kExitBadInput;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

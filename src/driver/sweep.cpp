@@ -141,7 +141,15 @@ OneRun run_point(const CaseSpec& spec, const std::string& dir, const AnalysisOpt
         r.complete = false;
         return r;
       }
-    } catch (const std::exception& e) {  // the output folder could not be written
+    } catch (const PathRefused& e) {  // the output folder could not be prepared
+      r.termination = "error";
+      r.message = e.what();
+      return r;
+    } catch (const OutputError& e) {  // a write failed (a full disk, a file size limit)
+      r.termination = std::string(to_string(Termination::OutputFailure));
+      r.message = e.what();
+      return r;
+    } catch (const std::exception& e) {  // the output folder could not be prepared
       r.termination = "error";
       r.message = e.what();
       return r;
@@ -149,6 +157,14 @@ OneRun run_point(const CaseSpec& spec, const std::string& dir, const AnalysisOpt
   }
   try {
     r.v = write_analysis(read_run(dir), ao);
+  } catch (const PathRefused& e) {
+    r.termination = "error";
+    r.complete = false;
+    r.message = std::string("analysis: ") + e.what();
+  } catch (const OutputError& e) {  // its files could not be written: a write failure
+    r.termination = std::string(to_string(Termination::OutputFailure));
+    r.complete = false;
+    r.message = std::string("analysis: ") + e.what();
   } catch (const std::exception& e) {
     r.termination = "error";
     r.complete = false;
@@ -493,12 +509,14 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
   const auto all = sweep_points(o.vary);
   RUBDYN_DEMAND(static_cast<double>(all.size()) == count);  // the product, as counted above
   // validate every point first: a bad value stops the sweep before anything is written
+  // (the case file read once: a FIFO, <(gen-case), can be read only once)
+  const std::string case_text = read_case_file(o.case_path);
   std::vector<CaseSpec> specs;
   specs.reserve(all.size());
   for (const auto& p : all) {
     auto sets = o.sets;
     for (const auto& x : p.overrides()) sets.push_back(x);
-    specs.push_back(load_case(o.case_path, sets));
+    specs.push_back(parse_case(case_text, o.case_path, sets));
   }
   if (members > 0) {  // the offset must leave every point's rotor inside its clearance
     long over = 0;
@@ -528,7 +546,7 @@ std::vector<SweepRow> run_sweep(const SweepOptions& o) {
       auto sets = o.sets;
       for (const auto& x : all[i].overrides()) sets.push_back(x);
       for (const auto& x : tight_overrides(specs[i])) sets.push_back(x);
-      tight.push_back(load_case(o.case_path, sets));
+      tight.push_back(parse_case(case_text, o.case_path, sets));
     }
   }
   // the members of this shard's points, each validated as a case (read back from its TOML)

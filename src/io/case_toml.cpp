@@ -6,6 +6,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -19,10 +20,12 @@
 #include "rubdyn/hybrid/event_driven.hpp"
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/columns.hpp"
 #include "rubdyn/io/matrix_files.hpp"
 #include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/io/solver_options.hpp"
 #include "rubdyn/io/text_files.hpp"
+#include "rubdyn/model/matrix_model.hpp"
 #include "rubdyn/stepping/fixed_step.hpp"
 
 namespace rubdyn {
@@ -228,7 +231,10 @@ void matrices_keys(SchemaBuilder& b, const CaseSpec& spec) {
   const auto node_moved = [](S c) {
     return c.matrices.nodes.empty()
                ? std::string()
-               : std::string("with [[contact_node]] tables each node has its keys in its table");
+               : fmt::format(
+                     "with [[contact_node]] tables each node has its keys in its table: "
+                     "contact_node.K.<key> with K = 1 to {}",
+                     c.matrices.nodes.size());
   };
   b.integer("contact_node", "x", [](CaseSpec& c) { return &c.matrices.node.x; });
   b.keys.back().required = single;
@@ -504,6 +510,93 @@ std::string node_text(const toml::node& n) {
   return "(value)";
 }
 
+/// Line `line` (1-based) of `text`, without its line end.
+std::string_view line_of(std::string_view text, std::size_t line) {
+  std::size_t pos = 0;
+  for (std::size_t l = 1; l < line; ++l) {
+    pos = text.find('\n', pos);
+    if (pos == std::string_view::npos) return {};
+    ++pos;
+  }
+  std::size_t end = text.find('\n', pos);
+  if (end == std::string_view::npos) end = text.size();
+  std::string_view s = text.substr(pos, end - pos);
+  if (!s.empty() && s.back() == '\r') s.remove_suffix(1);
+  return s;
+}
+
+/// The characters of a number as written from column `column` (1-based, in characters, as
+/// toml++ counts them) of `line`: digits, signs, '.', '_', 'e', 'E', "inf", "nan".
+std::string number_token(std::string_view line, std::size_t column) {
+  std::size_t i = 0;
+  for (std::size_t c = 1; c < column && i < line.size(); ++c) {
+    ++i;  // over one UTF-8 character
+    while (i < line.size() && (static_cast<unsigned char>(line[i]) & 0xC0) == 0x80) ++i;
+  }
+  std::size_t j = i;
+  while (j < line.size() && (std::isalnum(static_cast<unsigned char>(line[j])) || line[j] == '.' ||
+                             line[j] == '_' || line[j] == '+' || line[j] == '-'))
+    ++j;
+  return std::string(line.substr(i, j - i));
+}
+
+/// A decimal number written with a non-zero digit before its exponent: "1e-999" (read as 0 by
+/// an underflow) is one, "0.0e-5" is not.
+bool nonzero_mantissa(std::string_view token) {
+  for (const char ch : token) {
+    if (ch == 'e' || ch == 'E') return false;
+    if (ch >= '1' && ch <= '9') return true;
+  }
+  return false;
+}
+
+/// What is wrong with a number token that a double cannot hold: "" when it can. `token` must
+/// be a decimal number as a whole (strtod reads all of it), else "" too.
+std::string out_of_double_range(std::string_view token) {
+  std::string t;
+  for (const char ch : token)
+    if (ch != '_') t += ch;  // (TOML's digit separators)
+  if (t.empty() || t.find_first_not_of("0123456789+-.eE") != std::string::npos) return "";
+  errno = 0;
+  char* end = nullptr;
+  const double x = std::strtod(t.c_str(), &end);
+  if (end != t.c_str() + t.size()) return "";
+  if (std::isinf(x))
+    return fmt::format("is outside the range of a double (magnitude at most {:.17g})",
+                       std::numeric_limits<double>::max());
+  if (x == 0.0 && nonzero_mantissa(t))
+    return fmt::format(
+        "is below the smallest double ({:.2g}) in magnitude and would be read as 0: write 0 if "
+        "zero is meant",
+        std::numeric_limits<double>::denorm_min());
+  return "";
+}
+
+/// The key on line `line` of a TOML text as the case names it (section.key; the K-th table of
+/// a [[plane]] or [[contact_node]] array as plane.K), or "" when the line holds no key.
+std::string key_at_line(std::string_view text, std::size_t line) {
+  const std::string_view l = line_of(text, line);
+  const auto eq = l.find('=');
+  if (eq == std::string_view::npos) return "";
+  std::string key(l.substr(0, eq));
+  key.erase(0, key.find_first_not_of(" \t"));
+  key.erase(key.find_last_not_of(" \t") + 1);
+  if (key.empty()) return "";
+  std::string section;
+  std::map<std::string, int> tables;  // [[name]] headers met so far
+  for (std::size_t k = 1; k < line; ++k) {
+    std::string h(line_of(text, k));
+    h.erase(0, h.find_first_not_of(" \t"));
+    if (h.rfind("[[", 0) == 0 && h.find("]]") != std::string::npos) {
+      std::string name = h.substr(2, h.find("]]") - 2);
+      section = name + "." + std::to_string(++tables[name]);
+    } else if (h.rfind('[', 0) == 0 && h.find(']') != std::string::npos) {
+      section = h.substr(1, h.find(']') - 1);
+    }
+  }
+  return section.empty() ? key : section + "." + key;
+}
+
 class Loader {
  public:
   explicit Loader(std::string source, MatrixSnapshot* snapshot = nullptr)
@@ -511,11 +604,30 @@ class Loader {
 
   CaseSpec load(std::string_view text, const std::vector<std::string>& overrides) {
     toml::table doc;
+    text_ = text;
     try {
       doc = toml::parse(text, source_);
     } catch (const toml::parse_error& e) {
-      issues_.push_back({source_, static_cast<int>(e.source().begin.line), "(syntax)", "",
-                         std::string(e.description())});
+      // a number a double cannot hold (toml++ refuses 1e999 as a syntax error): said as such,
+      // with its key
+      const std::size_t line = e.source().begin.line;
+      const std::string_view l = line_of(text, line);
+      const auto eq = l.find('=');
+      const std::string key = key_at_line(text, line);
+      std::string value;
+      std::string why;
+      if (eq != std::string_view::npos && !key.empty()) {
+        std::string_view v = l.substr(eq + 1);
+        while (!v.empty() && (v.front() == ' ' || v.front() == '\t')) v.remove_prefix(1);
+        value = number_token(v, 1);
+        why = out_of_double_range(value);
+      }
+      if (!why.empty()) {
+        issues_.push_back({source_, static_cast<int>(line), key, value, why});
+      } else {
+        issues_.push_back(
+            {source_, static_cast<int>(line), "(syntax)", "", std::string(e.description())});
+      }
       throw CaseError(issues_);
     }
     split_planes(doc);
@@ -526,7 +638,12 @@ class Loader {
     // The model and its flags first: they decide which keys the case has (a rigid stator has
     // no stator coordinates; a prescribed spin no drive torque).
     read_model(doc, c);
-    const std::vector<KeySpec> keys = schema(c);
+    std::vector<KeySpec> keys = schema(c);
+    if (!model_known_) {
+      // an unknown kind has unknown keys: only the sections every model has are checked (the
+      // model's own sections and [initial] would be judged by a model the case does not name)
+      std::erase_if(keys, [](const KeySpec& k) { return model_specific(k.section); });
+    }
     const std::size_t n = initial_coordinates_or_none(c);
     c.initial.q0 = Vec::Zero(static_cast<Eigen::Index>(n));
     c.initial.v0 = Vec::Zero(static_cast<Eigen::Index>(n));
@@ -624,6 +741,10 @@ class Loader {
       try {
         holder = toml::parse("v = " + rhs);
       } catch (const toml::parse_error&) {
+        if (const std::string why = out_of_double_range(rhs); !why.empty()) {
+          issues_.push_back({"--set", 0, lhs, rhs, why});  // (not a bare string: a number)
+          continue;
+        }
         holder = toml::table{};
         holder.insert("v", rhs);
       }
@@ -635,6 +756,7 @@ class Loader {
       }
       sec->insert_or_assign(key, *holder.get("v"));
       overridden_.insert(section + "." + key);
+      set_text_[section + "." + key] = rhs;
     }
   }
 
@@ -735,6 +857,7 @@ class Loader {
         }
         continue;
       }
+      if (!model_known_ && model_specific(key)) continue;  // (see load)
       if (std::find(sections.begin(), sections.end(), key) == sections.end()) {
         // a table of a [[plane]] or [[contact_node]] array: of another model's case (reported
         // by read_model), or one that an override names beyond the file's tables
@@ -768,9 +891,31 @@ class Loader {
                             other_models_with_section(key, c.model)));
           continue;
         }
-        auto candidates = sections;
-        candidates.push_back("name");
-        issue(key, &node, "", "unknown section" + suggestion(key, candidates));
+        // (a section that only an override names is the override's error, not the file's)
+        std::string set_key;
+        for (const auto& o : overridden_)
+          if (o.rfind(key + ".", 0) == 0) set_key = o;
+        const bool array = (key == "plane" && planes_in_file_ > 0) ||
+                           (key == "contact_node" && nodes_in_file_ > 0);
+        std::string why;
+        if (array) {
+          const std::size_t tables = key == "plane" ? planes_in_file_ : nodes_in_file_;
+          why = fmt::format(
+              "the case has {} [[{}]] table(s): name one by its number, {}.K.<key> with K = 1 to "
+              "{} (e.g. {}.1.{})",
+              tables, key, key, tables, key,
+              set_key.empty() ? std::string("mu") : set_key.substr(key.size() + 1));
+        } else {
+          auto candidates = sections;
+          candidates.push_back("name");
+          why = "unknown section" + suggestion(key, candidates);
+        }
+        if (!set_key.empty() && node.source().begin.line == 0) {  // (made by an override)
+          const auto v = set_text_.find(set_key);
+          issues_.push_back({"--set", 0, set_key, v == set_text_.end() ? "" : v->second, why});
+        } else {
+          issue(key, &node, "", why);
+        }
         continue;
       }
       const toml::table* sec = node.as_table();
@@ -857,6 +1002,18 @@ class Loader {
           double v = 0.0;
           if (auto f = n->as_floating_point()) {
             v = f->get();
+            if (v == 0.0) {
+              // 1e-999 reads as 0: an underflow the user did not mean (the number as written)
+              const auto it = set_text_.find(full);
+              const std::string token = it != set_text_.end() && overridden_.count(full)
+                                            ? it->second
+                                            : number_token(line_of(text_, n->source().begin.line),
+                                                           n->source().begin.column);
+              if (const std::string why = out_of_double_range(token); !why.empty()) {
+                issue(full, n, token, why);
+                break;
+              }
+            }
           } else if (auto i = n->as_integer()) {
             v = static_cast<double>(i->get());
           } else {
@@ -920,6 +1077,13 @@ class Loader {
       for (auto s : e.sections)
         if (s == section) return true;
     return section == "initial";
+  }
+
+  /// A section whose keys depend on the model: its own sections, [initial], the tables of a
+  /// [[plane]] or [[contact_node]] array.
+  static bool model_specific(const std::string& section) {
+    return model_section(section) || section.rfind("plane.", 0) == 0 ||
+           section.rfind("contact_node.", 0) == 0;
   }
 
   const toml::node* at(const std::string& key) const {
@@ -1069,12 +1233,29 @@ class Loader {
       largest = std::abs(*x);
       key = e.full();
     }
+    // a matrices case's numbers are mostly in its files: an entry larger than every value
+    // given names its file's key (M = 1e308 I overflows the energy)
+    std::string entry;
+    if (c.model == "matrices") {
+      const MatrixRotorParams& r = c.matrices.rotor;
+      const auto most = [](const auto& m) { return m.size() ? m.cwiseAbs().maxCoeff() : 0.0; };
+      for (const auto& [k, a] : {std::pair<const char*, double>{"rotor.M", most(r.M)},
+                                 {"rotor.C", most(r.C)},
+                                 {"rotor.K", most(r.K)},
+                                 {"rotor.G", most(r.G)},
+                                 {"rotor.f0", most(r.f0)}}) {
+        if (!(a > largest)) continue;
+        largest = a;
+        key = k;
+        entry = fmt::format(" (an entry of {:g})", a);
+      }
+    }
     if (key.empty()) key = "initial.omega0";
     const toml::node* n = at(key);
     issue(key, n, n ? node_text(*n) : "(default)",
           fmt::format("{} is {} (an overflow): every quantity derived from the case must be "
-                      "finite; this is the largest value given",
-                      what, value));
+                      "finite; this is the largest value given{}",
+                      what, value, entry));
   }
 
   void rigid_rotor_rules(const CaseSpec& c) {
@@ -1261,14 +1442,24 @@ class Loader {
                          what, i, j, j, i, d));
         return false;
       }
-      a = 0.5 * (a + sign * Mat(a.transpose()));  // (exact when it already was)
+      // (left as it is when it already is; halves first: a + a^T would overflow at 1e308)
+      if (a != sign * Mat(a.transpose())) a = 0.5 * a + (0.5 * sign) * Mat(a.transpose());
       return true;
     };
     if (n >= 0 && symmetric("M", nM, M, 1, "symmetric (a mass matrix)")) {
       Eigen::LLT<Mat> llt(M);
-      if (llt.info() != Eigen::Success)
+      if (llt.info() != Eigen::Success) {
         pend("rotor.M", nM, quoted(nM),
              "must be positive definite (a mass matrix): its Cholesky factorisation fails");
+      } else if (const Mat Minv = llt.solve(Mat::Identity(n, n)); !Minv.allFinite()) {
+        // positive definite in exact arithmetic, but its inverse overflows a double (M = 5e-324
+        // I): every acceleration would be infinite
+        const Vec pivots = llt.matrixL().toDenseMatrix().diagonal();
+        pend("rotor.M", nM, quoted(nM),
+             fmt::format("must have an inverse a double can hold (a mass matrix): M^-1 overflows "
+                         "(its smallest Cholesky pivot squared is {:.3g} kg)",
+                         pivots.cwiseAbs2().minCoeff()));
+      }
     }
     if (square("C", nC, C) &&
         symmetric("C", nC, C, 1, "symmetric (a damping matrix; docs/models.md, 5)")) {
@@ -1311,10 +1502,21 @@ class Loader {
         const auto a = word.find_first_not_of(" \t"), b = word.find_last_not_of(" \t");
         names.push_back(a == std::string::npos ? "" : word.substr(a, b - a + 1));
       }
-      // each name a column of timeseries.csv and an [initial] key; so is "v" + name
-      std::set<std::string> taken = {"t",   "theta", "omega", "omega0", "x_s",
-                                     "y_s", "vx_s",  "vy_s",  "d_N",    "v_N",
-                                     "v_t", "F_N",   "F_T",   "phase",  "drive_torque"};
+      // each name a column of timeseries.csv and an [initial] key; so is "v" + name. Taken:
+      // the other columns of this case's timeseries.csv (t, theta, omega, the rings' x_s, y_s
+      // and rates, the contacts' d_N ... phase, numbered with several nodes: F_N_2), a
+      // prescribed spin's observables (drive_torque) and [initial] omega0, whatever the rings
+      std::set<std::string> taken = {"omega0"};
+      {
+        std::vector<MatrixNode> rings(std::max<std::size_t>(nodes_in_file_, 1));
+        for (auto& r : rings) r.stator.rigid = false;  // (every ring's names reserved)
+        // (a prescribed spin's observables, model/prescribed_spin.hpp: theta and omega are
+        // the spin's coordinate names anyway)
+        const std::vector<Observable> observables = {{"drive_torque", "N m", ""}};
+        for (const auto& col : timeseries_columns(matrix_model_coordinates(0, {}, rings),
+                                                  observables, static_cast<int>(rings.size())))
+          taken.insert(col.name);
+      }
       std::string bad;
       for (const auto& w : names) {
         const bool ident = !w.empty() &&
@@ -1329,8 +1531,11 @@ class Loader {
         std::string rate = "v";  // (appended: g++ 12 warns falsely about "v" + w)
         rate.append(w);
         if (!taken.insert(w).second || !taken.insert(rate).second) {
-          bad = fmt::format("'{}' (or its rate 'v{}') is taken by another coordinate or column", w,
-                            w);
+          bad = fmt::format(
+              "'{}' (or its rate 'v{}') is taken by another coordinate or column of "
+              "timeseries.csv (t, theta, omega, drive_torque, the rings' and the contacts' "
+              "columns{})",
+              w, w, nodes_in_file_ > 1 ? ", numbered per node: F_N_2" : "");
           break;
         }
       }
@@ -1509,8 +1714,10 @@ class Loader {
   std::string source_;
   MatrixSnapshot* snapshot_ = nullptr;  // kind "matrices": files as first read (case_io.hpp)
   int name_line_ = 0;                   // the line of the top-level `name`
+  std::string_view text_;  // the case file's text (numbers as written)
   std::vector<CaseIssue> issues_;
   std::set<std::string> overridden_;
+  std::map<std::string, std::string> set_text_;  // an override's value as given
   std::map<std::string, const toml::node*> present_;
   bool model_known_ = true;         // [model] kind names a model of the registry
   std::size_t planes_in_file_ = 0;  // the tables of the file's [[plane]] array
@@ -1530,11 +1737,11 @@ CaseSpec parse_case(std::string_view toml_text, const std::string& source,
   return Loader(source, snapshot).load(toml_text, overrides);
 }
 
-CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides) {
+std::string read_case_file(const std::string& path) {
   auto refuse = [&path](const std::string& why) {
     throw CaseError({{path, 0, "(file)", "", why}});
   };
-  // only a regular file of at most kMaxCaseBytes is a case file (text_files.hpp)
+  // a regular file or a FIFO of at most kMaxCaseBytes is a case file (text_files.hpp)
   std::string text;
   try {
     text = read_input_file(path, kMaxCaseBytes, "case");
@@ -1542,7 +1749,11 @@ CaseSpec load_case(const std::string& path, const std::vector<std::string>& over
     refuse(e.what());
   }
   if (text.find('\0') != std::string::npos) refuse("holds NUL bytes: not a text (TOML) file");
-  return parse_case(text, path, overrides);
+  return text;
+}
+
+CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides) {
+  return parse_case(read_case_file(path), path, overrides);
 }
 
 std::string toml_quote(std::string_view text) {

@@ -6,7 +6,10 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
+#include <limits>
+#include <string_view>
 #include <vector>
 
 #include "rubdyn/io/text_files.hpp"
@@ -38,7 +41,42 @@ std::string_view trim(std::string_view s) {
   return s;
 }
 
-Mat parse_csv(const std::string& text) {
+/// Why a field that std::from_chars refused is no number: its magnitude out of a double's
+/// range, or not a number at all (its bytes shown printable: a Latin-1 byte as \xB5).
+std::string not_a_number(std::string_view field, std::errc ec) {
+  const std::string shown = printable_text(field, 60);
+  if (ec == std::errc::result_out_of_range) {
+    // (from_chars says out of range for an overflow and for an underflow to zero; strtod tells
+    // which: +-HUGE_VAL or 0)
+    const std::string copy(field);
+    const double x = std::strtod(copy.c_str(), nullptr);
+    if (std::isinf(x))
+      return fmt::format("{} is outside the range of a double (magnitude at most {:.17g})", shown,
+                         std::numeric_limits<double>::max());
+    return fmt::format(
+        "{} is below the smallest double ({:.2g}) in magnitude and would be read as 0: write 0 "
+        "if zero is meant",
+        shown, std::numeric_limits<double>::denorm_min());
+  }
+  if (!valid_utf8(field))
+    return fmt::format(
+        "'{}' is not a number, and not UTF-8 text: a byte shown as \\xHH belongs to another "
+        "encoding (Latin-1?); save the file as UTF-8 or ASCII",
+        shown);
+  return fmt::format("'{}' is not a number (CSV: numbers separated by commas, no header)", shown);
+}
+
+Mat parse_csv(std::string_view text) {
+  // a file of another format named as CSV: said, rather than 'not a number' with its bytes
+  if (text.substr(0, 6) == std::string_view("\x93NUMPY", 6))
+    fail(
+        "holds NumPy .npy data (it starts with \\x93NUMPY) but its name does not end in .npy: "
+        "rename it (the format is chosen by the file name's ending)");
+  if (text.find('\0') != std::string_view::npos)
+    fail(
+        fmt::format("holds a NUL byte (at byte {}): a binary file, not CSV text", text.find('\0')));
+  // a UTF-8 byte order mark (spreadsheets write one) carries no data: skipped
+  if (text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
   std::vector<std::vector<double>> rows;
   std::size_t line_no = 0, pos = 0;
   while (pos < text.size()) {
@@ -54,17 +92,19 @@ Mat parse_csv(const std::string& text) {
       std::size_t b = line.find(',', a);
       if (b == std::string_view::npos) b = line.size();
       std::string_view field = trim(line.substr(a, b - a));
-      const std::string shown(field);
+      const std::string_view shown = field;
       if (!field.empty() && field.front() == '+') field.remove_prefix(1);
       double x = 0.0;
       const auto r = std::from_chars(field.data(), field.data() + field.size(), x);
-      if (field.empty() || r.ec != std::errc() || r.ptr != field.data() + field.size())
-        fail(
-            fmt::format("line {}, column {}: '{}' is not a number (CSV: numbers separated by "
-                        "commas, no header)",
-                        line_no, col, shown));
+      if (field.empty() || r.ptr != field.data() + field.size() ||
+          (r.ec != std::errc() && r.ec != std::errc::result_out_of_range))
+        fail(fmt::format("line {}, column {}: {}", line_no, col,
+                         not_a_number(shown, std::errc::invalid_argument)));
+      if (r.ec != std::errc())
+        fail(fmt::format("line {}, column {}: {}", line_no, col, not_a_number(shown, r.ec)));
       if (!std::isfinite(x))
-        fail(fmt::format("line {}, column {}: {} is not finite", line_no, col, shown));
+        fail(fmt::format("line {}, column {}: {} is not finite", line_no, col,
+                         printable_text(shown, 60)));
       row.push_back(x);
       if (b == line.size()) break;
       a = b + 1;
@@ -126,6 +166,15 @@ Mat parse_npy(const std::string& bytes) {
   }
   if (start + hlen > bytes.size()) fail("a truncated .npy header");
   const std::string h = bytes.substr(start, hlen);
+  // the header is a Python literal in ASCII (NumPy's format): another byte is no .npy header,
+  // and is never echoed raw in a message
+  for (std::size_t i = 0; i < h.size(); ++i) {
+    const unsigned char c = static_cast<unsigned char>(h[i]);
+    if ((c < 0x20 && c != '\n' && c != '\t') || c >= 0x7f)
+      fail(fmt::format("the .npy header holds the byte \\x{:02X} at offset {}: not ASCII text, "
+                       "not a NumPy .npy header",
+                       static_cast<unsigned>(c), start + i));
+  }
   const std::string descr = header_value(h, "descr");
   if (descr != "'<f8'" && descr != "\"<f8\"")
     fail(
@@ -158,7 +207,16 @@ Mat parse_npy(const std::string& bytes) {
     fail(fmt::format("a {}-D array (a matrix file holds a 1-D or 2-D array)", dims.size()));
   const long rows = dims[0], cols = dims.size() == 2 ? dims[1] : 1;
   const std::size_t data = start + hlen;
-  const std::size_t want = static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols) * 8;
+  // the data the shape declares, in bytes, without overflow (a header may declare 2^32 x 2^32
+  // entries, whose byte count wraps around to 0 in 64 bits)
+  std::size_t want = 0;
+  if (__builtin_mul_overflow(static_cast<std::size_t>(rows), static_cast<std::size_t>(cols),
+                             &want) ||
+      __builtin_mul_overflow(want, std::size_t{8}, &want))
+    fail(fmt::format(
+        "shape ({}) in the .npy header declares {:.3g} entries of float64, more than "
+        "any file holds (this one has {} bytes of data)",
+        shape, static_cast<double>(rows) * static_cast<double>(cols), bytes.size() - data));
   if (bytes.size() - data != want)
     fail(fmt::format("{} bytes of data where shape ({}) of float64 needs {}", bytes.size() - data,
                      shape, want));

@@ -2,12 +2,17 @@
 
 #include <fcntl.h>
 #include <fmt/format.h>
+#include <poll.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <stdexcept>
 
 namespace rubdyn {
@@ -40,6 +45,121 @@ std::vector<std::string> split_csv_line(const std::string& line) {
   return out;
 }
 
+namespace {
+
+/// The length of the valid UTF-8 sequence at text[i] (0: none there).
+std::size_t utf8_length(std::string_view text, std::size_t i) {
+  const auto b = [&](std::size_t k) { return static_cast<unsigned char>(text[k]); };
+  const unsigned char c = b(i);
+  if (c < 0x80) return 1;
+  std::size_t n = 0;
+  unsigned lo = 0x80, hi = 0xBF;  // the range of the second byte
+  if (c >= 0xC2 && c <= 0xDF) {
+    n = 2;
+  } else if (c >= 0xE0 && c <= 0xEF) {
+    n = 3;
+    if (c == 0xE0) lo = 0xA0;  // overlong
+    if (c == 0xED) hi = 0x9F;  // surrogates
+  } else if (c >= 0xF0 && c <= 0xF4) {
+    n = 4;
+    if (c == 0xF0) lo = 0x90;  // overlong
+    if (c == 0xF4) hi = 0x8F;  // above U+10FFFF
+  } else {
+    return 0;
+  }
+  if (i + n > text.size()) return 0;
+  if (b(i + 1) < lo || b(i + 1) > hi) return 0;
+  for (std::size_t k = 2; k < n; ++k)
+    if (b(i + k) < 0x80 || b(i + k) > 0xBF) return 0;
+  return n;
+}
+
+}  // namespace
+
+bool valid_utf8(std::string_view text) {
+  for (std::size_t i = 0; i < text.size();) {
+    const std::size_t n = utf8_length(text, i);
+    if (n == 0) return false;
+    i += n;
+  }
+  return true;
+}
+
+std::string printable_text(std::string_view text, std::size_t max_chars) {
+  std::string out;
+  std::size_t chars = 0;
+  for (std::size_t i = 0; i < text.size(); ++chars) {
+    if (chars == max_chars) return out + "...";
+    const unsigned char c = static_cast<unsigned char>(text[i]);
+    const std::size_t n = utf8_length(text, i);
+    if (n == 0 || c < 0x20 || c == 0x7f) {
+      out += fmt::format("\\x{:02X}", static_cast<unsigned>(c));
+      ++i;
+    } else {
+      out.append(text.substr(i, n));
+      i += n;
+    }
+  }
+  return out;
+}
+
+double input_pipe_wait() {
+  static const double seconds = [] {
+    if (const char* w = std::getenv("RUBDYN_PIPE_WAIT")) {
+      char* end = nullptr;
+      const double v = std::strtod(w, &end);
+      if (end != w && *end == '\0' && v >= 0.01 && v <= 3600.0) return v;
+    }
+    return 10.0;
+  }();
+  return seconds;
+}
+
+namespace {
+
+/// Reads a FIFO (a named pipe, or a shell's process substitution <(...)) to its end, at most
+/// max_bytes + 1 bytes, waiting at most `wait` seconds in all for its writer. The descriptor
+/// is non-blocking: a FIFO without a writer gives EOF (read 0) or EAGAIN at once, so that poll
+/// does the waiting, with the time left.
+std::string read_fifo(int fd, std::size_t max_bytes, double wait, std::string_view role,
+                      const std::function<void(const std::string&)>& refuse) {
+  using clock = std::chrono::steady_clock;
+  const auto deadline = clock::now() + std::chrono::duration<double>(wait);
+  std::string text;
+  char buf[65536];
+  bool data = false;
+  for (;;) {
+    const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n > 0) {
+      text.append(buf, static_cast<std::size_t>(n));
+      data = true;
+      if (text.size() > max_bytes) return text;  // (refused by the caller)
+      continue;
+    }
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0 && errno != EAGAIN)
+      refuse(fmt::format("cannot read the {} file: {}", role, std::strerror(errno)));
+    if (n == 0 && data) return text;  // end of file: every writer closed after writing
+    // nothing yet: no writer (read 0) or a writer that has not written (EAGAIN)
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - clock::now()).count();
+    struct pollfd p {};
+    p.fd = fd;
+    p.events = POLLIN;
+    const int r = left > 0 ? ::poll(&p, 1, static_cast<int>(left)) : 0;
+    if (r < 0 && errno == EINTR) continue;
+    if (r < 0) refuse(fmt::format("cannot read the {} file: {}", role, std::strerror(errno)));
+    if (r == 0)
+      refuse(fmt::format(
+          "is a FIFO (named pipe) from which {} within {:g} s (no writer, or a slow one; "
+          "RUBDYN_PIPE_WAIT sets the wait in seconds)",
+          data ? "the rest did not arrive" : "nothing arrived", wait));
+    if ((p.revents & POLLHUP) && !(p.revents & POLLIN)) return text;  // a writer came and went
+  }
+}
+
+}  // namespace
+
 std::string read_input_file(const std::string& path, std::size_t max_bytes, std::string_view role) {
   auto refuse = [](const std::string& why) { throw InputRefused(why); };
   auto cannot = [&](int err) {
@@ -47,34 +167,39 @@ std::string read_input_file(const std::string& path, std::size_t max_bytes, std:
   };
   const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
   if (fd < 0) refuse(cannot(errno));
+  // (closed on every way out, a refusal's exception included)
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
   struct stat st {};
-  if (::fstat(fd, &st) != 0) {
-    const int err = errno;
-    ::close(fd);
-    refuse(cannot(err));
-  }
-  if (!S_ISREG(st.st_mode)) {
-    ::close(fd);
+  if (::fstat(fd, &st) != 0) refuse(cannot(errno));
+  std::string text;
+  if (S_ISFIFO(st.st_mode)) {
+    text = read_fifo(fd, max_bytes, input_pipe_wait(), role, refuse);
+  } else if (!S_ISREG(st.st_mode)) {
     refuse(S_ISDIR(st.st_mode)    ? fmt::format("is a directory, not a {} file", role)
-           : S_ISFIFO(st.st_mode) ? "is a FIFO (named pipe), not a regular file: not read"
            : S_ISSOCK(st.st_mode) ? "is a socket, not a regular file: not read"
                                   : "is a device, not a regular file: not read");
-  }
-  std::string text(max_bytes + 1, '\0');
-  std::size_t got = 0;
-  while (got < text.size()) {
-    const ssize_t n = ::read(fd, text.data() + got, text.size() - got);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) {
-      const int err = errno;
-      ::close(fd);
-      refuse(cannot(err));
+  } else {
+    // what the file holds, as fstat says: no more is allocated or zero-filled (a file that
+    // grows while it is read is read on, in steps, up to max_bytes + 1 bytes)
+    const std::size_t size = static_cast<std::size_t>(std::max<off_t>(st.st_size, 0));
+    text.resize(std::min(size, max_bytes) + 1);
+    std::size_t got = 0;
+    for (;;) {
+      if (got == text.size()) {
+        if (text.size() > max_bytes) break;
+        text.resize(std::min(std::max(2 * text.size(), std::size_t{4096}), max_bytes + 1));
+      }
+      const ssize_t n = ::read(fd, text.data() + got, text.size() - got);
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0) refuse(cannot(errno));
+      if (n == 0) break;
+      got += static_cast<std::size_t>(n);
     }
-    if (n == 0) break;
-    got += static_cast<std::size_t>(n);
+    text.resize(got);
   }
-  ::close(fd);
-  text.resize(got);
   if (text.size() > max_bytes)
     refuse(fmt::format("a file larger than {} bytes: not a {} file", max_bytes, role));
   return text;

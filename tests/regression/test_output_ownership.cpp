@@ -189,16 +189,18 @@ TEST_CASE("Output paths: a FIFO is written to its reader, refused without one, n
   fs::remove_all(d);
 }
 
-TEST_CASE("Case files: a FIFO is refused with exit 2 naming it, without blocking",
+TEST_CASE("Case files: a FIFO without a writer is refused with exit 2 after a bounded wait",
           "[ownership][cli]") {
+  // (a FIFO with a writer is read: test_new_surfaces.cpp, test_new_surfaces_cli.cpp)
   const fs::path d = fresh_dir("case-fifo");
   fs::create_directories(d);
   REQUIRE(::mkfifo((d / "case.toml").c_str(), 0600) == 0);
-  // `timeout` guards the test: a blocking open would end with 124 instead of hanging it
-  const CliOutcome o = cli("check " + sh(d / "case.toml"), "timeout 20 ");
+  // `timeout` guards the test: a blocking open or an unbounded wait would end with 124 instead
+  // of hanging it; RUBDYN_PIPE_WAIT shortens the wait (10 s by default)
+  const CliOutcome o = cli("check " + sh(d / "case.toml"), "RUBDYN_PIPE_WAIT=0.5 timeout 20 ");
   CHECK(o.code == 2);
   CHECK(has(o.err, (d / "case.toml").string()));
-  CHECK(has(o.err, "FIFO"));
+  CHECK(has(o.err, "is a FIFO (named pipe) from which nothing arrived within 0.5 s"));
   fs::remove_all(d);
 }
 

@@ -43,6 +43,8 @@
 
 namespace rubdyn {
 
+struct CaseSpec;
+
 /// The whirl-labelled modes at one spin speed: for a linear model with N nodes, N forward and N
 /// backward modes, index 1 the lowest frequency in each direction.
 struct CampbellPoint {
@@ -63,8 +65,11 @@ struct CampbellPoint {
 class CampbellSolver {
  public:
   /// damped = false: D = 0 (the paper's Campbell diagram); true: the model's dampers.
+  /// Throws std::invalid_argument for a model with no coordinate or no (x, y) node (nothing
+  /// whirls: a Jeffcott rotor in a rigid stator tied to it).
   explicit CampbellSolver(const LinearModel& lm, bool damped = false);
-  /// The rigid rotor's tied system (RotorStatorModel::linearize(Linearization::Tied)).
+  /// The rigid rotor's tied system (RotorStatorModel::linearize(Linearization::Tied)); throws
+  /// std::invalid_argument when it has none (a [[plane]] with a fixed ring).
   explicit CampbellSolver(const RotorStatorParams& p, bool damped = false);
 
   /// The modes at spin speed omega [rad/s] (any sign; omega < 0 swaps the directions).
@@ -108,6 +113,19 @@ CampbellDiagram compute_campbell_diagram(const LinearModel& lm, double omega_max
                                          bool damped = false);
 CampbellDiagram compute_campbell_diagram(const RotorStatorParams& p, double omega_max,
                                          int points = 201, bool damped = false);
+
+/// The linear model of a case's Campbell diagram (`rubdyn campbell`, Python's
+/// rubdyn.campbell): the model's linearisation with the stator tied to the rotor (the paper's
+/// coupled system, `tied`), or its free modes (no contact, `tied` false) when the tied system
+/// does not exist (a fixed ring tied to the rotor is a constraint) or has nothing left to
+/// vibrate (a Jeffcott rotor in a rigid stator).
+struct CampbellModel {
+  LinearModel lm;
+  bool tied = true;
+};
+/// Of a validated case. Throws CaseError naming the key that leaves the model without a
+/// linearisation (a matrices rotor of odd size n: rotor.M).
+CampbellModel campbell_model(const CaseSpec& spec);
 
 /// campbell.csv text: header omega_rad_s,omega_rpm,f1b,f1f,f2b,f2f,... (Hz) and, when damped,
 /// zeta_1b,zeta_1f,...; one row per grid point, 17 significant digits.

@@ -52,7 +52,9 @@ struct DerivedQuantities {
   double y_b = 0, y_r = 0, y_s = 0;  ///< static positions [m]
   Vec q_static = Vec::Zero(7);       ///< the same as a generalised position (x_* = theta = 0)
   // natural frequencies at rest [Hz]
-  double f1 = 0, f2 = 0;       ///< coupled system (stator tied at R), each a double mode
+  /// coupled system (stator tied at R), each a double mode; NaN when a plane's ring is fixed
+  /// (a fixed ring tied to the rotor is a constraint: no tied system)
+  double f1 = 0, f2 = 0;
   double f_stator = 0;         ///< stator alone sqrt(k_s / m_s) / 2 pi
   double f_bearing_rotor = 0;  ///< rotor on its bearing, no stator (its other mode: 0 Hz)
   // free acceleration from omega0 to omega_lim

@@ -22,8 +22,8 @@ namespace rubdyn {
 inline constexpr long kMaxOutputRows = 100'000'000;
 
 /// A case file is read up to this size (1 MiB; the reference case is 2 kB): a larger file, or
-/// a device such as /dev/zero or a FIFO (anything but a regular file), is refused rather than
-/// read without end.
+/// a device such as /dev/zero, is refused rather than read without end; a FIFO (`rubdyn check
+/// <(gen-case)`) is read with a bounded wait for its writer (io/text_files.hpp).
 inline constexpr std::size_t kMaxCaseBytes = 1 << 20;
 
 /// The matrices a case of kind "matrices" read, by the path of their file as resolved
@@ -34,6 +34,10 @@ using MatrixSnapshot = std::map<std::string, Mat>;
 
 /// Reads, overrides, validates. Throws CaseError (every problem listed) on bad input.
 CaseSpec load_case(const std::string& path, const std::vector<std::string>& overrides = {});
+
+/// The text of a case file (what load_case parses; read once, as a FIFO can be). Throws
+/// CaseError naming the file: not readable, not a regular file or FIFO, too large, NUL bytes.
+std::string read_case_file(const std::string& path);
 
 /// Same, from TOML text; `source` is the name used in messages (tests, stdin) and the file whose
 /// folder relative matrix paths start from. With `snapshot`, matrix files are taken from it when

@@ -23,6 +23,15 @@ std::vector<std::string> split_csv_line(const std::string& line);
 /// character (and DEL) as a \u00XX escape, any other byte as is.
 std::string quoted_string(std::string_view text);
 
+/// Whether `text` is valid UTF-8 (no stray continuation byte, no truncated or overlong
+/// sequence, no surrogate, nothing above U+10FFFF).
+bool valid_utf8(std::string_view text);
+
+/// `text` as it can be shown in a message: valid UTF-8 kept, every other byte, control
+/// character and DEL as \xHH (a Latin-1 byte 0xB5 as \xB5, never the raw byte); at most
+/// `max_chars` characters, then "..." (a long field does not flood the message).
+std::string printable_text(std::string_view text, std::size_t max_chars = 80);
+
 /// An input file that rubdyn refuses to read, with the reason (the caller names the file and
 /// turns it into its own error: a case error, a matrix-file error).
 class InputRefused : public std::runtime_error {
@@ -32,12 +41,18 @@ class InputRefused : public std::runtime_error {
 
 /// Reads a whole input file (a case, a matrix) of at most max_bytes. It is opened without
 /// waiting (O_NONBLOCK: a FIFO without a writer would block the open) and asked what it is
-/// before a byte is read: only a regular file is read (a FIFO or a device may never end, or
-/// never begin); a regular file may still grow while read, so at most max_bytes + 1 bytes are
-/// read. Throws InputRefused with the reason, which names the file's `role` ("case",
-/// "matrix"): cannot be opened or read, a directory, a FIFO, a socket, a device, larger than
-/// max_bytes.
+/// before a byte is read. A regular file is read as large as it is (no buffer of max_bytes is
+/// allocated); it may still grow while read, so at most max_bytes + 1 bytes are read. A FIFO (a
+/// named pipe, or a shell's process substitution `rubdyn check <(gen-case)`) is read to its end,
+/// waiting at most input_pipe_wait() seconds in all for its writer. Throws InputRefused with
+/// the reason, which names the file's `role` ("case", "matrix"): cannot be opened or read, a
+/// directory, a socket, a device (a FIFO or a device may never end, or never begin), a FIFO
+/// from which nothing (or not all) arrived in time, larger than max_bytes.
 std::string read_input_file(const std::string& path, std::size_t max_bytes, std::string_view role);
+
+/// How long read_input_file waits for a FIFO's writer, in seconds: 10, or the environment
+/// variable RUBDYN_PIPE_WAIT (0.01 to 3600) read once.
+double input_pipe_wait();
 
 /// rubdyn ends every row it writes with a line end: a last row without one was cut by a kill
 /// (or a full disk) and may hold a truncated number. Readers drop it with this warning.
