@@ -15,6 +15,7 @@
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/io/output_folder.hpp"
+#include "rubdyn/io/reduction_files.hpp"
 #include "rubdyn/io/text_files.hpp"
 
 namespace rubdyn {
@@ -158,6 +159,7 @@ OutputFolder::OutputFolder(const std::string& dir, const CaseSpec& spec, std::at
   if (analysis_dir) ::unlinkat(fd, "analysis", AT_REMOVEDIR);  // only when empty: kept otherwise
   try {
     write_file_at(fd, "case.resolved.toml", dir + "/case.resolved.toml", to_toml(spec));
+    write_reduction_files(fd, dir, spec);  // (a reduced matrices model's; io/reduction_files.hpp)
     ts_ = open_output_stream_at(fd, "timeseries.csv", dir + "/timeseries.csv");
     ev_ = open_output_stream_at(fd, "events.csv", dir + "/events.csv");
     std::string header, ev_header;
@@ -294,6 +296,7 @@ std::string summary_json(const RunSummary& s) {
   field("complete", s.complete() ? "true" : "false");
   field("termination", json_string(to_string(s.termination)));
   field("message", json_string(s.message));
+  if (!s.model.empty()) field("model", json_string(s.model));
   field("t_start", json_number(s.t_start));
   field("t_end_requested", json_number(s.t_end_requested));
   field("t_reached", json_number(s.t_reached));

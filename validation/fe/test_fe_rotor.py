@@ -370,3 +370,58 @@ def test_committed_case_runs_with_event_and_moreau_jean(name, t_end, impacts, fi
         assert np.allclose(te, tm, rtol=0, atol=1e-9)
         err = np.max(np.hypot(xe - xm, ye - ym))
         assert 0.0 < err < 5e-5, err
+
+
+# ---- [reduction] through the CLI ---------------------------------------------------------------
+
+@needs_cli
+def test_a_reduced_run_writes_its_model_and_bad_input_exits_2():
+    # rubdyn run with a Craig-Bampton reduction (20 modes) of cases/fe-runup.toml: the output
+    # folder holds the reduced matrices, the basis and the modes; the reduced matrices are
+    # T^T A T of the case's files (1e-14 of the largest entry: one product's round-off), G_r
+    # skew-symmetric to the bit, T's rows at the seal unit rows, timeseries.csv's columns the
+    # reduced coordinates, summary.json's "model" says what was reduced. Bad [reduction] values
+    # exit 2 naming their key, nothing written. A run without reduction into the same folder
+    # removes the reduced files (they would describe another model).
+    import json
+    case = os.path.join(ROOT, "cases", "fe-runup.toml")
+    with open(case, "rb") as f:
+        c = tomllib.load(f)
+    folder = os.path.join(ROOT, "cases")
+    full = {k: np.load(os.path.join(folder, c["rotor"][k])) for k in ("M", "C", "K", "G", "f0")}
+    sets = ["--set", "reduction.method=craig-bampton", "--set", "reduction.modes=20"]
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "run")
+        run(case, out, "--t-end", "0.01", *sets)
+        T = np.load(os.path.join(out, "reduced_T.npy"))
+        assert T.shape == (52, 22)
+        for k in ("M", "C", "K", "G"):
+            r = np.load(os.path.join(out, f"reduced_{k}.npy"))
+            np.testing.assert_allclose(r, T.T @ full[k] @ T, rtol=0,
+                                       atol=1e-14 * np.abs(r).max() if r.any() else 0.0)
+        np.testing.assert_array_equal(np.load(os.path.join(out, "reduced_G.npy")),
+                                      -np.load(os.path.join(out, "reduced_G.npy")).T)
+        assert np.array_equal(T[24], np.eye(22)[0]) and np.array_equal(T[25], np.eye(22)[1])
+        assert np.load(os.path.join(out, "reduced_modes.npy")).shape == (52, 20)
+        with open(os.path.join(out, "reduction.json")) as f:
+            red = json.load(f)
+        assert red["method"] == "craig-bampton" and red["reduced_size"] == 22
+        assert red["physical"] == {"x6": 24, "y6": 25} and len(red["modes_hz"]) == 20
+        with open(os.path.join(out, "timeseries.csv")) as f:
+            header = f.readline().strip().split(",")
+        assert header[1:23] == red["coordinates"]
+        with open(os.path.join(out, "summary.json")) as f:
+            summary = json.load(f)
+        assert summary["model"].startswith("Craig-Bampton reduction to 20 modes: 52 -> 22")
+        # bad input: exit 2, the key named, nothing written
+        bad = os.path.join(tmp, "bad")
+        for value, key in (("reduction.modes=60", "reduction.modes"),
+                           ("reduction.cutoff=100", "reduction.cutoff")):
+            p = subprocess.run([RUBDYN, "run", case, "--out", bad, "--set",
+                                "reduction.method=craig-bampton", "--set", value],
+                               capture_output=True, text=True)
+            assert p.returncode == 2 and key in p.stderr, p.stderr
+            assert not os.path.exists(bad)
+        # the unreduced model into the same folder: the reduced files go
+        run(case, out, "--t-end", "0.01")
+        assert not any(n.startswith("reduced_") or n == "reduction.json" for n in os.listdir(out))
