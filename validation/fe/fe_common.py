@@ -61,19 +61,20 @@ def grid(folder, columns, dt=1e-4):
     return d["t"], {c: d[c] for c in columns}
 
 
-def orbit_difference(a, b, nodes, dt=1e-4):
+def orbit_difference(a, b, nodes, dt=1e-4, column="omega"):
     """The largest distance between two runs' seal centres (x_k, y_k of each node k) over their
-    common grid times, the largest over the nodes."""
+    common grid times, the largest over the nodes; and the largest difference of `column`
+    (omega; drive_torque at a prescribed spin) over the same times."""
     cols = [f"{c}{k}" for k in nodes for c in ("x", "y")]
-    ta, ga = grid(a, cols + ["omega"], dt)
-    tb, gb = grid(b, cols + ["omega"], dt)
+    ta, ga = grid(a, cols + [column], dt)
+    tb, gb = grid(b, cols + [column], dt)
     ka, kb = np.round(ta / dt).astype(int), np.round(tb / dt).astype(int)
     common, ia, ib = np.intersect1d(ka, kb, return_indices=True)
     worst = 0.0
     for k in nodes:
         d = np.hypot(ga[f"x{k}"][ia] - gb[f"x{k}"][ib], ga[f"y{k}"][ia] - gb[f"y{k}"][ib])
         worst = max(worst, float(d.max()))
-    return worst, float(np.max(np.abs(ga["omega"][ia] - gb["omega"][ib])))
+    return worst, float(np.max(np.abs(ga[column][ia] - gb[column][ib])))
 
 
 def events(summary):
