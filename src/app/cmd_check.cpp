@@ -9,6 +9,7 @@
 #include "commands.hpp"
 #include "rubdyn/analysis/derived.hpp"
 #include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/model/matrix_model.hpp"
 
 namespace rubdyn::app {
@@ -88,10 +89,11 @@ int check_jeffcott(const CaseSpec& c) {
 /// Kind "matrices": what was read (its derived quantities are the user's: `rubdyn campbell`
 /// gives its frequencies).
 int check_matrices(const CaseSpec& c) {
-  const auto& p = c.matrices;
+  const MatrixParams p = matrix_model_params(c);  // (the reduced model with a [reduction])
   const MatrixModel m(p);
   fmt::print("case {} ({}): valid\n", c.name, c.source);
   fmt::print("a user's linear rotor (matrices), n = {}\n", p.rotor.size());
+  if (const std::string note = model_note(c); !note.empty()) fmt::print("  {}\n", note);
   std::string names;
   for (const auto& x : m.coordinates()) names += (names.empty() ? "" : ", ") + x.name;
   fmt::print("  coordinates: {}\n", names);

@@ -10,6 +10,7 @@ std::string brief_report(const RunSummary& s) {
   std::string r;
   auto line = [&r](const std::string& l) { r += l + "\n"; };
   line(fmt::format("solver        {}  {}", s.solver, s.options));
+  if (!s.model.empty()) line("model         " + s.model);
   line(fmt::format("termination   {}{}", to_string(s.termination),
                    s.message.empty() ? "" : ": " + s.message));
   line(fmt::format("time          {:.9g} s of {:.9g} s simulated in {:.4g} s wall", s.t_reached,

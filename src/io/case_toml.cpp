@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -209,6 +210,29 @@ void jeffcott_keys(SchemaBuilder& b) {
   b.num("stator", "gap", true, [](CaseSpec& c) { return &c.jeffcott.stator.gap; });
 }
 
+/// [reduction] of kind "matrices" (model/matrix_reduction.hpp): read before the other keys, as
+/// the files are, since the reduced model's coordinates are the case's (Loader::read_reduction).
+void reduction_keys(SchemaBuilder& b) {
+  using S = const CaseSpec&;
+  b.choice(
+      "reduction", "method", {"none", "modal", "craig-bampton"},
+      [](S c) { return std::string(to_string(c.reduction.method)); },
+      [](CaseSpec& c, const std::string& w) {
+        c.reduction.method = w == "modal"           ? ReductionMethod::Modal
+                             : w == "craig-bampton" ? ReductionMethod::CraigBampton
+                                                    : ReductionMethod::None;
+      });
+  const auto unreduced = [](S c) {
+    return c.reduction.method == ReductionMethod::None
+               ? std::string("read only with reduction.method = \"modal\" or \"craig-bampton\"")
+               : std::string();
+  };
+  b.integer("reduction", "modes", [](CaseSpec& c) { return &c.reduction.modes; });
+  b.keys.back().refused = unreduced;
+  b.num(
+      "reduction", "cutoff", false, [](CaseSpec& c) { return &c.reduction.cutoff; }, unreduced);
+}
+
 void matrices_keys(SchemaBuilder& b, const CaseSpec& spec) {
   // the matrices' files (read as the model is read: they decide the coordinates)
   const auto required = [](const CaseSpec&) { return true; };
@@ -309,6 +333,7 @@ void matrices_keys(SchemaBuilder& b, const CaseSpec& spec) {
         sec, "stator_c", false, [at](CaseSpec& c) { return &at(c).stator.c; }, node_rigid_refuses,
         node_sprung);
   }
+  reduction_keys(b);
 }
 
 /// The largest size n of a matrices model (its hot paths cost n^2 per solve).
@@ -809,6 +834,7 @@ class Loader {
         if (r && r->as_boolean()) c.matrices.nodes[k].stator.rigid = r->as_boolean()->get();
       }
       read_matrices(doc, c);
+      read_reduction(doc, c);
     } else if (nodes_in_file_ > 0) {
       issue("contact_node", nullptr, "",
             fmt::format("[[contact_node]] tables are read by [model] kind = \"matrices\" only "
@@ -1564,6 +1590,64 @@ class Loader {
     r.names = std::move(names);
   }
 
+  /// [reduction] (kind "matrices"): its keys and the contact nodes' coordinates are read before
+  /// the others (read_values reads them again and reports a wrong type; the node rules report
+  /// bad indices), and the reduced model is computed once here: its coordinates are the case's
+  /// ([initial] keys, output columns). Its problems wait in matrix_issues_ for matrices_rules.
+  void read_reduction(const toml::table& doc, CaseSpec& c) {
+    const toml::node* sec = doc.get("reduction");
+    const toml::table* t = sec ? sec->as_table() : nullptr;
+    if (!t) return;
+    ReductionParams& r = c.reduction;
+    if (const toml::node* n = t->get("method"); n && n->as_string()) {
+      const std::string w = n->as_string()->get();
+      r.method = w == "modal"           ? ReductionMethod::Modal
+                 : w == "craig-bampton" ? ReductionMethod::CraigBampton
+                                        : ReductionMethod::None;
+    }
+    if (r.method == ReductionMethod::None) return;
+    if (const toml::node* n = t->get("modes"); n && n->as_integer()) {
+      const auto v = n->as_integer()->get();
+      r.modes = v < 0 ? -1 : static_cast<int>(std::min<std::int64_t>(v, 1 << 30));
+    }
+    if (const toml::node* n = t->get("cutoff")) {
+      if (auto f = n->as_floating_point()) r.cutoff = f->get();
+      if (auto i = n->as_integer()) r.cutoff = static_cast<double>(i->get());
+    }
+    reduction_ok_ = false;  // until it is computed
+    if (!matrices_ok_) return;
+    // the nodes' coordinates as the file gives them (a node's other keys do not matter here)
+    MatrixParams p = c.matrices;
+    const auto index = [&doc](const std::string& section, const char* key, int& out) {
+      const toml::node* s = doc.get(section);
+      const toml::node* n = s && s->is_table() ? s->as_table()->get(key) : nullptr;
+      if (!n || !n->as_integer()) return false;
+      const auto v = n->as_integer()->get();
+      if (v < 0 || v > std::numeric_limits<int>::max()) return false;
+      out = static_cast<int>(v);
+      return true;
+    };
+    bool nodes_read = true;
+    if (p.nodes.empty()) {
+      nodes_read = index("contact_node", "x", p.node.x) && index("contact_node", "y", p.node.y);
+    } else {
+      for (std::size_t k = 0; k < p.nodes.size(); ++k)
+        nodes_read = nodes_read && index(node_section(k), "x", p.nodes[k].at.x) &&
+                     index(node_section(k), "y", p.nodes[k].at.y);
+    }
+    if (!nodes_read) return;  // (the node's rules say why)
+    try {
+      c.reduced = std::make_shared<const ReducedMatrices>(reduce_matrix_model(p, r));
+      reduction_ok_ = true;
+    } catch (const ReductionRefused& e) {
+      const std::string key = e.key();
+      const toml::node* n = key.rfind("reduction.", 0) == 0 ? t->get(key.substr(10)) : nullptr;
+      // (a key not given, e.g. modes with neither modes nor cutoff: where the method is)
+      const Origin o = n ? origin(key, n) : origin("reduction.method", t->get("method"));
+      matrix_issues_.push_back({o.file, o.line, key, n ? node_text(*n) : "", e.what()});
+    }
+  }
+
   void matrices_rules(const CaseSpec& c) {
     const std::size_t before = issues_.size();
     issues_.insert(issues_.end(), matrix_issues_.begin(), matrix_issues_.end());
@@ -1619,11 +1703,13 @@ class Loader {
              "must be >= 0 (the ring's support damping)");
       }
     }
-    buildable_ = matrices_ok_;
-    if (!matrices_ok_ || issues_.size() != before) return;
+    // ([reduction]'s own rules are reduce_matrix_model's, reported by read_reduction)
+    buildable_ = matrices_ok_ && reduction_ok_;
+    if (!buildable_ || issues_.size() != before) return;
     // M_full(q) = [[M, b], [b^T, Jp]] is positive definite where the Schur complement
     // Jp - b^T M^-1 b of theta is > 0 (docs/models.md, 5.3): required of the initial state
-    const double schur = MatrixModel(p).schur(c.initial.q0);
+    // (of the reduced model with a [reduction]: its coordinates are the initial state's)
+    const double schur = MatrixModel(matrix_model_params(c)).schur(c.initial.q0);
     rule(schur > 0, "rotor.Jp", p.rotor.Jp,
          fmt::format("must exceed b^T M^-1 b = {:.6g} kg m^2 at the initial state (b = G q / 2 "
                      "+ the unbalance's column; docs/models.md, 5.3): M_full is not positive "
@@ -1727,7 +1813,8 @@ class Loader {
   std::set<std::string> read_early_;
   std::vector<CaseIssue> matrix_issues_;
   bool matrices_ok_ = true;
-  bool buildable_ = true;  // the model can be built (with valid parameters)
+  bool reduction_ok_ = true;  // no [reduction], or the reduced model was computed
+  bool buildable_ = true;     // the model can be built (with valid parameters)
 };
 
 }  // namespace

@@ -30,11 +30,27 @@ std::unique_ptr<LagrangianModel> build_jeffcott(const CaseSpec& spec) {
 }
 
 std::vector<Coordinate> matrices_coordinates(const CaseSpec& spec) {
+  // with a reduction that the loading refused, the files' coordinates (the case is invalid and
+  // reported; its [initial] keys are still checked against something)
+  // (the names and nodes only: no copy of the matrices)
   const MatrixParams& p = spec.matrices;
-  return matrix_model_coordinates(p.rotor.size(), p.rotor.names, p.node_list());
+  std::vector<MatrixNode> nodes = p.node_list();
+  std::shared_ptr<const ReducedMatrices> red;
+  if (spec.reduction.method != ReductionMethod::None) {
+    try {
+      red = matrix_reduction(spec);
+    } catch (const ReductionRefused&) {
+    }
+  }
+  if (!red) return matrix_model_coordinates(p.rotor.size(), p.rotor.names, nodes);
+  for (std::size_t k = 0; k < nodes.size() && k < red->node_xy.size(); ++k) {
+    nodes[k].at.x = red->node_xy[k].first;
+    nodes[k].at.y = red->node_xy[k].second;
+  }
+  return matrix_model_coordinates(red->rotor.size(), red->rotor.names, nodes);
 }
 std::unique_ptr<LagrangianModel> build_matrices(const CaseSpec& spec) {
-  return std::make_unique<MatrixModel>(spec.matrices);
+  return std::make_unique<MatrixModel>(matrix_model_params(spec));
 }
 
 }  // namespace
@@ -56,7 +72,7 @@ const std::vector<ModelEntry>& model_registry() {
       {"matrices",
        "a user's linear rotor: M, C, K, G (and a load f0) read from files, the spin an unknown, "
        "one contact node inside a sprung or rigid stator",
-       {"rotor", "contact_node", "stator"},
+       {"rotor", "contact_node", "stator", "reduction"},
        &matrices_coordinates,
        &build_matrices},
   };
@@ -119,6 +135,23 @@ MechanicalState initial_state(const CaseSpec& spec) {
     s.v = v;
   }
   return s;
+}
+
+std::shared_ptr<const ReducedMatrices> matrix_reduction(const CaseSpec& spec) {
+  if (spec.model != "matrices" || spec.reduction.method == ReductionMethod::None) return nullptr;
+  if (spec.reduced) return spec.reduced;
+  return std::make_shared<const ReducedMatrices>(
+      reduce_matrix_model(spec.matrices, spec.reduction));
+}
+
+MatrixParams matrix_model_params(const CaseSpec& spec) {
+  const std::shared_ptr<const ReducedMatrices> red = matrix_reduction(spec);
+  return red ? red->apply(spec.matrices) : spec.matrices;
+}
+
+std::string model_note(const CaseSpec& spec) {
+  const std::shared_ptr<const ReducedMatrices> red = matrix_reduction(spec);
+  return red ? red->describe() : std::string();
 }
 
 double nominal_torque(const CaseSpec& spec) {

@@ -16,6 +16,7 @@
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/io/output_folder.hpp"
+#include "rubdyn/io/reduction_files.hpp"
 #include "rubdyn/io/text_files.hpp"
 #include "rubdyn/model/matrix_model.hpp"
 #include "rubdyn/model/rotor_stator_params.hpp"
@@ -188,6 +189,7 @@ OutputFolder::OutputFolder(const std::string& dir, const CaseSpec& spec, std::at
     // the matrices first: a case.resolved.toml on disk always has its files beside it
     for (const auto& [name, bytes] : matrices) write_file_at(fd, name, dir + "/" + name, bytes);
     write_file_at(fd, "case.resolved.toml", dir + "/case.resolved.toml", resolved_toml(spec));
+    write_reduction_files(fd, dir, spec);  // (a reduced matrices model's; io/reduction_files.hpp)
     ts_ = open_output_stream_at(fd, "timeseries.csv", dir + "/timeseries.csv");
     ev_ = open_output_stream_at(fd, "events.csv", dir + "/events.csv");
     std::string header, ev_header;
@@ -343,6 +345,7 @@ std::string summary_json(const RunSummary& s) {
   field("complete", s.complete() ? "true" : "false");
   field("termination", json_string(to_string(s.termination)));
   field("message", json_string(s.message));
+  if (!s.model.empty()) field("model", json_string(s.model));
   field("t_start", json_number(s.t_start));
   field("t_end_requested", json_number(s.t_end_requested));
   field("t_reached", json_number(s.t_reached));

@@ -164,6 +164,9 @@ struct RunSummary {
   double t_omega_lim = std::numeric_limits<double>::quiet_NaN();  ///< NaN when never crossed
   Termination termination = Termination::Completed;
   std::string message;
+  /// What the run's model is when it is not the case's as written (a reduced matrices model:
+  /// ReducedMatrices::describe()); empty otherwise. Set by the driver (simulate).
+  std::string model;
   bool complete() const { return termination == Termination::Completed; }
   /// energy_residual = (E_final - E_initial) - (sum of the works): the one definition.
   void close_energy_balance() {

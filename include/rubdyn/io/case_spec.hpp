@@ -2,12 +2,14 @@
 // CaseSpec: the one parsed, validated form of a case file (TOML). Only io/ knows TOML; the model
 // gets RotorStatorParams, solvers get options structs. Every key, unit and admissible range is
 // documented in cases/README.md.
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "rubdyn/core/types.hpp"
 #include "rubdyn/model/jeffcott_model.hpp"
 #include "rubdyn/model/matrix_model.hpp"
+#include "rubdyn/model/matrix_reduction.hpp"
 #include "rubdyn/model/rotor_stator_model.hpp"
 #include "rubdyn/model/rotor_stator_params.hpp"
 
@@ -76,6 +78,12 @@ struct CaseSpec {
   JeffcottParams jeffcott;   ///< the parameters of kind "jeffcott"
   MatrixParams matrices;     ///< the parameters of kind "matrices" (the matrices read)
   MatrixFiles matrix_files;  ///< where kind "matrices" read them
+  /// [reduction] of kind "matrices": the model is the reduced one of `matrices` (which stays the
+  /// files' full rotor, as the keys name it). `reduced` is that reduction as the case's loading
+  /// computed it (it decides the coordinates), shared by the copies of the case; null when
+  /// there is none or it failed (io/model_registry.hpp: matrix_reduction).
+  ReductionParams reduction;
+  std::shared_ptr<const ReducedMatrices> reduced;
   InitialState initial;
   RunOptions run;
   SolverOptions solver;

@@ -7,6 +7,7 @@
 // Adding a model: its class in model/, one entry in src/io/model_registry.cpp, its keys and
 // rules in src/io/case_toml.cpp, its section in cases/README.md.
 #include <memory>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -44,6 +45,17 @@ std::vector<Coordinate> initial_coordinates(const CaseSpec& spec);
 
 /// The state a run of the case starts from, in the model's coordinates, at run.t_start.
 MechanicalState initial_state(const CaseSpec& spec);
+
+/// Kind "matrices" with a [reduction]: the reduced model (the loading's, or computed now when a
+/// case built in code has none); null without a reduction. Throws ReductionRefused when the
+/// reduction is refused (the case validation reports it first).
+std::shared_ptr<const ReducedMatrices> matrix_reduction(const CaseSpec& spec);
+/// The parameters of a matrices case's model: the reduced ones with a [reduction], else the
+/// files' (spec.matrices).
+MatrixParams matrix_model_params(const CaseSpec& spec);
+/// What a run's model is when it is not the case's files as they stand (a reduction's
+/// describe()), for the report and summary.json; empty otherwise.
+std::string model_note(const CaseSpec& spec);
 
 /// The case's driving torque tau_a (loads.torque) [N m]: the scale of the friction torque in
 /// the analysis.
