@@ -47,6 +47,8 @@ constexpr double kSingularRcond = 1e-12;
 // The chart is re-based at the iterate when |xi|_inf exceeds this (scaled units): the manifold
 // of a gap-sized circle stays a graph over its tangent plane to a fraction of L.
 constexpr double kRebase = 0.5;
+// Fixed-point steps x <- P(x) at most while a guess's phases at t0 and t0 + T differ.
+constexpr int kMaxFixedPointSteps = 10;
 // Halvings of a Newton step whose residual does not fall.
 constexpr int kMaxHalvings = 8;
 
@@ -545,15 +547,22 @@ std::string_view to_string(OrbitOutcome o) {
 
 namespace {
 
-/// The final run over one period, sampled, with its events and books.
-void describe_orbit(const PeriodMap& map, double T, int samples, OrbitResult& res) {
-  res.orbit = map.run(res.x0, T, T / std::max(1, samples));
+/// The orbit's run over one period, its events after t0 and its phase times.
+void set_orbit(OrbitResult& res, FlowRun r, double t0) {
+  res.orbit = std::move(r);
+  res.events.clear();
+  res.event_counts = {};
   for (const auto& e : res.orbit.events) {
-    if (e.t <= map.t0()) continue;
-    res.events.push_back({e.t - map.t0(), e.kind, e.contact, e.phase_before, e.phase_after});
+    if (e.t <= t0) continue;
+    res.events.push_back({e.t - t0, e.kind, e.contact, e.phase_before, e.phase_after});
     ++res.event_counts[static_cast<std::size_t>(e.kind)];
   }
   res.phase_time = res.orbit.summary.phase_time;
+}
+
+/// The final run over one period, sampled.
+void describe_orbit(const PeriodMap& map, double T, int samples, OrbitResult& res) {
+  set_orbit(res, map.run(res.x0, T, T / std::max(1, samples)), map.t0());
 }
 
 }  // namespace
@@ -570,6 +579,12 @@ OrbitResult find_forced_orbit(const PeriodMap& map, VecIn guess, double T, doubl
   auto finish = [&](OrbitOutcome o, std::string msg) {
     res.outcome = o;
     res.message = std::move(msg);
+    // the last iterate's period, sampled (also when the search failed: orbit.csv shows it)
+    if (res.orbit.samples.empty() && res.x0.size() == map.state_size() && opt.samples > 0)
+      describe_orbit(map, T, opt.samples, res);
+    if (res.floquet.reason.empty())
+      res.floquet.reason =
+          "no multipliers: the search ended without an orbit (" + std::string(to_string(o)) + ")";
     res.runs = map.runs() - runs0;
     res.wall_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - clock0).count();
@@ -585,6 +600,24 @@ OrbitResult find_forced_orbit(const PeriodMap& map, VecIn guess, double T, doubl
   FlowRun run = map.run(guess, T);
   res.x0 = guess;
   if (!run.complete()) return failed_run(run, "the run from the initial guess");
+  // A point of the orbit is in the same phases at t0 and t0 + T. A guess that is not (e.g. in
+  // free flight near a contact orbit) is replaced by its image first: fixed-point steps, which
+  // bring a stable orbit's neighbourhood onto its phases.
+  for (int k = 0; k < kMaxFixedPointSteps && start_phases(run) != end_phases(run); ++k) {
+    NewtonRecord rec;
+    rec.iteration = static_cast<int>(res.history.size());
+    rec.signature = event_signature(run, res.t0);
+    rec.jacobian = "fixed point (the phases at t0 and t0 + T differ)";
+    const Vec x0 = stacked_state(run.samples.front());
+    const Vec x1 = stacked_state(run.samples.back());
+    rec.residual = (x1 - x0).cwiseQuotient(D).cwiseAbs().maxCoeff();
+    rec.step = rec.residual;
+    run = map.run(x1, T);
+    rec.runs = map.runs() - runs0;
+    res.history.push_back(rec);
+    res.x0 = x1;
+    if (!run.complete()) return failed_run(run, "the run from a fixed-point step");
+  }
   Vec x = stacked_state(run.samples.front());  // the integrator's start (on the constraint)
   res.x0 = x;
   auto chart = std::make_unique<SectionChart>(model, res.t0, x, start_phases(run), D);
@@ -597,7 +630,8 @@ OrbitResult find_forced_orbit(const PeriodMap& map, VecIn guess, double T, doubl
   Mat J;
   bool have_J = false;
   const FiniteDifferenceMonodromy newton_fd({opt.newton_step});
-  for (int it = 0;; ++it) {
+  const int it0 = static_cast<int>(res.history.size());
+  for (int it = it0;; ++it) {
     NewtonRecord rec;
     rec.iteration = it;
     rec.residual = res_norm;
@@ -608,7 +642,7 @@ OrbitResult find_forced_orbit(const PeriodMap& map, VecIn guess, double T, doubl
       res.history.push_back(rec);
       break;
     }
-    if (it >= opt.max_iterations) {
+    if (it - it0 >= opt.max_iterations) {
       rec.runs = map.runs() - runs0;
       res.history.push_back(rec);
       return finish(OrbitOutcome::NoConvergence,
@@ -726,8 +760,12 @@ OrbitResult find_forced_orbit(const PeriodMap& map, VecIn guess, double T, doubl
        fd.refine(map, T, at, zero, run, res.monodromy);
        ++k)
     res.floquet = floquet_analysis(res.monodromy, tangent, D);
-  describe_orbit(map, T, opt.samples, res);
-  if (!res.orbit.complete()) return failed_run(res.orbit, "the sampled run on the orbit");
+  if (opt.samples > 0) {
+    describe_orbit(map, T, opt.samples, res);
+    if (!res.orbit.complete()) return failed_run(res.orbit, "the sampled run on the orbit");
+  } else {
+    set_orbit(res, run, res.t0);  // the run from the orbit's state: its ends and events
+  }
   if (!res.monodromy.ok)
     return finish(OrbitOutcome::RunFailed, "monodromy: " + res.monodromy.failure);
   if (res.monodromy.sequence_changed)
@@ -737,7 +775,7 @@ OrbitResult find_forced_orbit(const PeriodMap& map, VecIn guess, double T, doubl
                       res.monodromy.sequence_note);
   return finish(OrbitOutcome::Converged,
                 fmt::format("converged in {} Newton iterations, residual {:.3g}",
-                            res.history.size() - 1, res.residual));
+                            res.history.size() - 1 - static_cast<std::size_t>(it0), res.residual));
 }
 
 }  // namespace rubdyn

@@ -269,7 +269,9 @@ struct OrbitOptions {
   /// Steps added (FiniteDifferenceMonodromy::refine) while the verdict is undecided.
   int fd_refinements = 2;
   double newton_step = 1e-4;  ///< the step of Newton's finite-difference Jacobian
-  int samples = 200;          ///< samples of the orbit's final run per period (orbit.csv)
+  /// Samples of the orbit's final run per period (orbit.csv); 0: no sampled run (the run of the
+  /// last iterate, its ends and events, stands for it)
+  int samples = 200;
   /// A provider of the final monodromy instead of finite differences (nullptr: them).
   const MonodromyProvider* provider = nullptr;
 };
