@@ -47,6 +47,13 @@ constexpr double kSingularRcond = 1e-12;
 // The chart is re-based at the iterate when |xi|_inf exceeds this (scaled units): the manifold
 // of a gap-sized circle stays a graph over its tangent plane to a fraction of L.
 constexpr double kRebase = 0.5;
+// Newton's last finite-difference Jacobian seeds the final monodromy when the orbit lies within
+// this (scaled) distance of the iterate where it was taken. Moving the base point by delta moves
+// the derivative by |P''| delta, with |P''| = O(10) in scaled units on the full rub: 1e-4 at
+// most, below the differences' own error (1e-3 at rtol 1e-10). And the error bound is set by the
+// difference between the seed and the other step's estimate, which includes the shift whatever
+// it is.
+constexpr double kReuseDistance = 1e-5;
 // Fixed-point steps x <- P(x) at most while a guess's phases at t0 and t0 + T differ.
 constexpr int kMaxFixedPointSteps = 10;
 // Halvings of a Newton step whose residual does not fall.
@@ -384,6 +391,20 @@ void FiniteDifferenceMonodromy::combine(Monodromy& m) {
 Monodromy FiniteDifferenceMonodromy::compute(const PeriodMap& map, double T,
                                              const SectionChart& chart, VecIn xi,
                                              const FlowRun& at) const {
+  return compute_impl(map, T, chart, xi, at, 0.0, nullptr);
+}
+
+Monodromy FiniteDifferenceMonodromy::compute_seeded(const PeriodMap& map, double T,
+                                                    const SectionChart& chart, VecIn xi,
+                                                    const FlowRun& at, double h_known,
+                                                    const Mat& Phi_known) const {
+  return compute_impl(map, T, chart, xi, at, h_known, &Phi_known);
+}
+
+Monodromy FiniteDifferenceMonodromy::compute_impl(const PeriodMap& map, double T,
+                                                  const SectionChart& chart, VecIn xi,
+                                                  const FlowRun& at, double h_known,
+                                                  const Mat* Phi_known) const {
   Monodromy m;
   const long runs0 = map.runs();
   const std::string sig0 = event_signature(at, map.t0());
@@ -391,7 +412,9 @@ Monodromy FiniteDifferenceMonodromy::compute(const PeriodMap& map, double T,
   std::sort(steps.rbegin(), steps.rend());
   for (const double h : steps) {
     Mat Phi;
-    if (!estimate(map, T, chart, xi, sig0, h, m, Phi)) {
+    if (Phi_known && std::abs(h - h_known) <= 1e-12 * h) {
+      Phi = *Phi_known;
+    } else if (!estimate(map, T, chart, xi, sig0, h, m, Phi)) {
       m.runs = map.runs() - runs0;
       m.ok = false;
       return m;
@@ -406,6 +429,9 @@ Monodromy FiniteDifferenceMonodromy::compute(const PeriodMap& map, double T,
     return m;
   }
   combine(m);
+  if (Phi_known)
+    m.method += fmt::format(" [h = {:.3g}: Newton's last Jacobian, taken within 1e-5 of the orbit]",
+                            h_known);
   return m;
 }
 
@@ -630,6 +656,13 @@ OrbitResult find_forced_orbit(const PeriodMap& map, VecIn guess, double T, doubl
   Mat J;
   bool have_J = false;
   const FiniteDifferenceMonodromy newton_fd({opt.newton_step});
+  // Newton's last finite-difference Jacobian, where it was taken (a seed of the final monodromy)
+  struct Seed {
+    Monodromy m;
+    std::unique_ptr<SectionChart> chart;
+    Vec xi, x;
+  };
+  std::unique_ptr<Seed> seed;
   const int it0 = static_cast<int>(res.history.size());
   for (int it = it0;; ++it) {
     NewtonRecord rec;
@@ -659,6 +692,7 @@ OrbitResult find_forced_orbit(const PeriodMap& map, VecIn guess, double T, doubl
       }
       J = mj.M - Mat::Identity(chart->dim(), chart->dim());
       have_J = true;
+      seed = std::make_unique<Seed>(Seed{mj, std::make_unique<SectionChart>(*chart), xi, x});
       rec.jacobian = "finite differences";
     } else {
       rec.jacobian = "broyden";
@@ -752,7 +786,20 @@ OrbitResult find_forced_orbit(const PeriodMap& map, VecIn guess, double T, doubl
   const MonodromyProvider& provider = opt.provider ? *opt.provider : fd;
   const Vec zero = Vec::Zero(at.dim());
   const Mat tangent = at.tangent(zero);
-  res.monodromy = provider.compute(map, T, at, zero, run);
+  bool seeded = false;
+  if (!opt.provider && seed && !seed->m.sequence_changed &&
+      at.scaled_distance(seed->x, x) <= kReuseDistance &&
+      std::find(opt.fd_steps.begin(), opt.fd_steps.end(), opt.newton_step) != opt.fd_steps.end()) {
+    // the seed in this chart's coordinates: C = d(coords here) / d(coords there)
+    const Mat C = at.coords_jacobian() * seed->chart->tangent(seed->xi);
+    const Eigen::ColPivHouseholderQR<Mat> qc(C);
+    if (qc.rank() == at.dim()) {
+      const Mat Phi = C * seed->m.M * qc.inverse();
+      res.monodromy = fd.compute_seeded(map, T, at, zero, run, opt.newton_step, Phi);
+      seeded = true;
+    }
+  }
+  if (!seeded) res.monodromy = provider.compute(map, T, at, zero, run);
   res.floquet = floquet_analysis(res.monodromy, tangent, D);
   // step-size control: more steps while the error leaves the verdict open
   for (int k = 0;

@@ -203,6 +203,11 @@ class FiniteDifferenceMonodromy final : public MonodromyProvider {
   std::string_view name() const override { return "finite differences"; }
   Monodromy compute(const PeriodMap& map, double T, const SectionChart& chart, VecIn xi,
                     const FlowRun& at) const override;
+  /// compute(), with the estimate at the step h_known already known (Phi_known, in this chart's
+  /// coordinates at xi): Newton's last finite-difference Jacobian, when the orbit is that
+  /// close to where it was taken (find_forced_orbit). Its runs are not repeated.
+  Monodromy compute_seeded(const PeriodMap& map, double T, const SectionChart& chart, VecIn xi,
+                           const FlowRun& at, double h_known, const Mat& Phi_known) const;
   /// One more step (see above) into m, recombined; false when no step would help or m failed.
   bool refine(const PeriodMap& map, double T, const SectionChart& chart, VecIn xi,
               const FlowRun& at, Monodromy& m) const;
@@ -213,6 +218,8 @@ class FiniteDifferenceMonodromy final : public MonodromyProvider {
   bool estimate(const PeriodMap& map, double T, const SectionChart& chart, VecIn xi,
                 const std::string& sig0, double h, Monodromy& m, Mat& Phi) const;
   static void combine(Monodromy& m);
+  Monodromy compute_impl(const PeriodMap& map, double T, const SectionChart& chart, VecIn xi,
+                         const FlowRun& at, double h_known, const Mat* Phi_known) const;
   std::vector<double> steps_;
 };
 
@@ -268,7 +275,10 @@ struct OrbitOptions {
   std::vector<double> fd_steps = {1e-3, 2.5e-4};
   /// Steps added (FiniteDifferenceMonodromy::refine) while the verdict is undecided.
   int fd_refinements = 2;
-  double newton_step = 1e-4;  ///< the step of Newton's finite-difference Jacobian
+  /// The step of Newton's finite-difference Jacobian. When it is one of fd_steps and the orbit
+  /// lies within 1e-5 (scaled) of the iterate where the last such Jacobian was taken, that
+  /// Jacobian is the final monodromy's estimate at this step (its runs are not repeated).
+  double newton_step = 1e-3;
   /// Samples of the orbit's final run per period (orbit.csv); 0: no sampled run (the run of the
   /// last iterate, its ends and events, stands for it)
   int samples = 200;
