@@ -189,7 +189,7 @@ SectionChart::SectionChart(const LagrangianModel& model, double t, VecIn x_b,
     N_.resize(N, 0);
     return;
   }
-  const Mat J = jacobian(xb_);
+  const Mat J = jacobian(m_, xb_);
   Eigen::ColPivHouseholderQR<Mat> qr(J.transpose());
   const int r = static_cast<int>(qr.rank());
   const Mat Q = qr.householderQ() * Mat::Identity(N, N);
@@ -197,8 +197,8 @@ SectionChart::SectionChart(const LagrangianModel& model, double t, VecIn x_b,
   B_ = Q.rightCols(N - r);
 }
 
-Vec SectionChart::values(VecIn x) const {
-  const int n = m_.num_dofs();
+Vec SectionChart::values(const LagrangianModel& m, VecIn x) const {
+  const int n = m.num_dofs();
   Vec g(static_cast<Eigen::Index>(rows_.size()));
   ContactKinematics c(n);
   int last = -1;
@@ -210,10 +210,10 @@ Vec SectionChart::values(VecIn x) const {
       continue;
     }
     if (row.contact != last) {
-      m_.compute_contact(row.contact, t_, q, v, c);
+      m.compute_contact(row.contact, t_, q, v, c);
       last = row.contact;
     }
-    const double L = m_.gap_scale(row.contact);
+    const double L = m.gap_scale(row.contact);
     const double w = speed_ / len_;
     g(static_cast<Eigen::Index>(r)) = row.kind == 0   ? c.d_N / L
                                       : row.kind == 1 ? c.v_N / (L * w)
@@ -222,8 +222,8 @@ Vec SectionChart::values(VecIn x) const {
   return g;
 }
 
-Mat SectionChart::jacobian(VecIn x) const {
-  const int n = m_.num_dofs();
+Mat SectionChart::jacobian(const LagrangianModel& mdl, VecIn x) const {
+  const int n = mdl.num_dofs();
   const int m = static_cast<int>(rows_.size());
   Mat J = Mat::Zero(m, 2 * n);
   const Vec q = x.head(n), v = x.tail(n);
@@ -235,8 +235,8 @@ Mat SectionChart::jacobian(VecIn x) const {
       J(r, row.index) = 1.0;
       continue;
     }
-    const double L = m_.gap_scale(row.contact);
-    m_.compute_contact(row.contact, t_, q, v, c);
+    const double L = mdl.gap_scale(row.contact);
+    mdl.compute_contact(row.contact, t_, q, v, c);
     if (row.kind == 0) {
       for (int j = 0; j < n; ++j) J(r, j) = c.W_N(j) * D_(j) / L;
       continue;
@@ -249,8 +249,8 @@ Mat SectionChart::jacobian(VecIn x) const {
       Vec qp = q, qm = q;
       qp(j) += h;
       qm(j) -= h;
-      m_.compute_contact(row.contact, t_, qp, v, cp);
-      m_.compute_contact(row.contact, t_, qm, v, cm);
+      mdl.compute_contact(row.contact, t_, qp, v, cp);
+      mdl.compute_contact(row.contact, t_, qm, v, cm);
       const double dp = row.kind == 1 ? cp.v_N - cm.v_N : cp.v_t - cm.v_t;
       J(r, j) = dp / (2.0 * h) * D_(j) / (L * w);
     }
@@ -258,24 +258,26 @@ Mat SectionChart::jacobian(VecIn x) const {
   return J;
 }
 
-bool SectionChart::embed(VecIn xi, Vec& x) const {
+bool SectionChart::embed(VecIn xi, Vec& x) const { return embed_on(m_, xi, x); }
+
+bool SectionChart::embed_on(const LagrangianModel& model, VecIn xi, Vec& x) const {
   const Vec s0 = B_ * xi;
   x = xb_ + D_.cwiseProduct(s0);
   if (rows_.empty()) return all_finite(x);
   Vec eta = Vec::Zero(N_.cols());
   for (int it = 0; it < kProjectionIterations; ++it) {
     x = xb_ + D_.cwiseProduct(s0 + N_ * eta);
-    const Vec g = values(x);
+    const Vec g = values(model, x);
     if (!all_finite(g)) return false;
     const double defect = g.cwiseAbs().maxCoeff();
     if (defect <= kProjectionTol) return true;
-    const Mat A = jacobian(x) * N_;
+    const Mat A = jacobian(model, x) * N_;
     const Vec d = A.colPivHouseholderQr().solve(-g);
     if (!all_finite(d)) return false;
     eta += d;
     if (d.cwiseAbs().maxCoeff() <= kProjectionStall * (1.0 + eta.cwiseAbs().maxCoeff())) {
       x = xb_ + D_.cwiseProduct(s0 + N_ * eta);
-      return values(x).cwiseAbs().maxCoeff() <= kProjectionLoose;
+      return values(model, x).cwiseAbs().maxCoeff() <= kProjectionLoose;
     }
   }
   return false;
@@ -287,7 +289,7 @@ Vec SectionChart::coords(VecIn x) const {
 
 double SectionChart::constraint_defect(VecIn x) const {
   if (rows_.empty()) return 0.0;
-  return values(x).cwiseAbs().maxCoeff();
+  return values(m_, x).cwiseAbs().maxCoeff();
 }
 
 Mat SectionChart::coords_jacobian() const {

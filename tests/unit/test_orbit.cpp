@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "rubdyn/analysis/continuation.hpp"
 #include "rubdyn/analysis/orbit.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/model_registry.hpp"
@@ -518,4 +519,85 @@ TEST_CASE(
       for (double q : ratios) CHECK(std::abs(q / mu - 1.0) <= 1e-3);
     }
   }
+}
+
+// Step 4 of issue 33: the continuation of the sprung ring's forward full rub in the spin speed
+// from 1750 rad/s (the larger, stable root) through the fold where it meets the saddle branch,
+// which docs/closed-forms.md 5.1 puts where the quadratic (5.2)'s discriminant vanishes.
+TEST_CASE(
+    "orbit: the continuation in the spin speed locates the full rub's fold at the closed "
+    "form's speed",
+    "[orbit]") {
+  FullRubSet p;
+  p.rigid = false;
+  const std::string text = case_text(p, 1e-10, 1e-12);
+  const ModelFamily family = [&](double omega) {
+    const CaseSpec spec = parse_case(text, "full-rub.toml", {"initial.omega0=" + fmt_g(omega)});
+    ParameterModel pm;
+    pm.model = build_model(spec);
+    pm.omega = omega;
+    pm.period = 2 * std::numbers::pi / omega;
+    pm.options = event_driven_options(spec);
+    return pm;
+  };
+  // the closed-form fold: the discriminant of (5.2) in N vanishes (bisection on the number of
+  // real roots, to 1e-9 rad/s)
+  auto roots_at = [&](double omega) {
+    FullRubSet q = p;
+    q.Omega = omega;
+    return full_rub_roots(q);
+  };
+  double lo = 1750.0, hi = 1900.0;
+  while (hi - lo > 1e-9) {
+    const double mid = 0.5 * (lo + hi);
+    (std::isfinite(roots_at(mid)[0].N) ? lo : hi) = mid;
+  }
+  const double fold = 0.5 * (lo + hi);  // 1804.5921501 (validation/orbits/table.md)
+  FullRubSet start = p;
+  start.Omega = 1750.0;
+  ContinuationOptions opt;
+  opt.lambda_scale = 15.0;  // 1 % of the speed: the state and the speed move alike
+  opt.ds_max = 3.0;
+  opt.max_points = 30;
+  const Branch b =
+      continue_forced_orbit(family, 1750.0, orbit_state(start, full_rub_roots(start)[0]), opt);
+  INFO(b.outcome << ": " << b.message);
+  REQUIRE(b.points.size() == 30);
+  REQUIRE(b.specials.size() == 1);
+  const BranchSpecial& f = b.specials[0];
+  CHECK(f.kind == "fold");
+  // Located to 2.6e-9 relative (measured, 5e-6 rad/s): the computed branch departs from the
+  // exact one by the integration error of the orbits (1.7e-7 of the state at rtol 1e-10,
+  // table.md), which moves the fold's speed by as much at most; bound 1e-6 relative (1.8e-3
+  // rad/s), the location's own error (the corrector's tol, the parabola's) being far below.
+  CHECK(std::abs(f.lambda / fold - 1.0) <= 1e-6);
+  // Along the branch: stable before the fold and a saddle after (one real multiplier through
+  // +1 there), the normal force the closed form's larger root before and the smaller after.
+  const auto fold_at = static_cast<std::size_t>(f.after);
+  for (std::size_t i = 0; i < b.points.size(); ++i) {
+    const BranchPoint& q = b.points[i];
+    const bool before = i <= fold_at;
+    INFO("point " << i << " at " << q.lambda);
+    CHECK(q.floquet.stability == (before ? Stability::Stable : Stability::Unstable));
+    CHECK(q.signature == "slip- | | slip-");
+    const auto r = roots_at(q.lambda);
+    REQUIRE(r.size() == 2);
+    const double N = before ? r[0].N : r[1].N;
+    // The force is constant on the steady orbit: its extremes over the period are N to the
+    // integration error (measured 4e-8 .. 5.3e-7 relative away from the fold at rtol 1e-10:
+    // each point's integration error, whose steps change from point to point). Near the fold the
+    // roots follow N = N_f +- a sqrt(fold - Omega), so the computed branch's shift of the fold by
+    // delta (measured 5e-6 rad/s) moves N at a given Omega by up to (N+ - N-) delta / (4 Delta),
+    // Delta = fold - Omega: the bound is 2e-6 N plus twice that, delta taken as the measured
+    // shift or 1e-8 of the speed, whichever is larger.
+    const double delta = std::max(std::abs(f.lambda - fold), 1e-8 * fold);
+    const double bound =
+        2e-6 * N + (r[0].N - r[1].N) * delta / (2.0 * std::max(fold - q.lambda, 1e-300));
+    CHECK(std::abs(q.F_N_max - N) <= bound);
+    CHECK(std::abs(q.F_N_min - N) <= bound);
+  }
+  const double m0 = std::abs(b.points[fold_at].floquet.multipliers.front().value);
+  const double m1 = std::abs(b.points[fold_at + 1].floquet.multipliers.front().value);
+  CHECK(m0 < 1.0);
+  CHECK(m1 > 1.0);
 }

@@ -116,6 +116,10 @@ class SectionChart {
   /// The manifold's point with coordinates xi, into x; false when the projection onto the
   /// constraints does not converge (xi too far from the base for the chart).
   bool embed(VecIn xi, Vec& x) const;
+  /// The same onto the constraints of another model of the same coordinates (a continuation's
+  /// model at another parameter value, whose constraints may differ: a gap, a radius): the
+  /// chart's base, basis and time, that model's d_N, v_N, v_t.
+  bool embed_on(const LagrangianModel& model, VecIn xi, Vec& x) const;
   /// xi of a state on the manifold: B^T D^-1 (x - x_b).
   Vec coords(VecIn x) const;
   /// The largest scaled constraint value at x (0 on the manifold): |d_N| / L, |v_N| / (L Omega),
@@ -137,8 +141,9 @@ class SectionChart {
     int kind;  // 0: d_N, 1: v_N, 2: v_t, 3: pinned component
     int index;
   };
-  Vec values(VecIn x) const;    // scaled constraint values (size m)
-  Mat jacobian(VecIn x) const;  // d values / d s (m x 2n), s the scaled state
+  // scaled constraint values of model m (size m) and their derivative in the scaled state s
+  Vec values(const LagrangianModel& m, VecIn x) const;
+  Mat jacobian(const LagrangianModel& m, VecIn x) const;
   const LagrangianModel& m_;
   double t_;
   Vec xb_, D_;
