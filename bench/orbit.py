@@ -59,6 +59,20 @@ def main():
             cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
             rows.append((d["wall_seconds"], wall, cpu, d["runs"], d["stability"],
                          len(d["newton"]) - 1))
+        # the continuation: rubdyn branch in the spin speed, 200 points asked (the branch ends
+        # earlier where its orbits lift off: the time per point is the measure)
+        out = os.path.join(tmp, "b")
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        t = time.perf_counter()
+        p = subprocess.run([a.cli, "branch", a.case, "--vary", "initial.omega0", "--points", "200",
+                            "--ds-max", "3", "--out", out], capture_output=True, text=True)
+        bwall = time.perf_counter() - t
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        if p.returncode != 0:
+            raise SystemExit(f"rubdyn branch failed ({p.returncode}): {p.stderr}")
+        bcpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+        with open(os.path.join(out, "branch.json")) as f:
+            bj = json.load(f)
     loads.append(os.getloadavg())
     search = [r[0] for r in rows]
     proc = [r[1] for r in rows]
@@ -85,6 +99,13 @@ def main():
         f"{max(proc):.4f} |",
         f"| the CLI process, CPU (user + system) | {statistics.median(cpu):.4f} | {min(cpu):.4f} | "
         f"{max(cpu):.4f} |",
+        "",
+        f"The continuation (issue 33's target: 200 points in under 30 s): `rubdyn branch "
+        f"{os.path.relpath(a.case, ROOT)} --vary initial.omega0 --points 200 --ds-max 3` gave "
+        f"{bj['points']} points ({bj['outcome']}: the branch ends where its orbits lift off), "
+        f"{bj['runs']} runs, in {bwall:.2f} s wall and {bcpu:.2f} s CPU: "
+        f"{bwall / bj['points'] * 1e3:.0f} ms a point, i.e. {200 * bwall / bj['points']:.1f} s "
+        "for 200 points at this rate.",
         "",
     ]
     with open(a.out, "w") as f:

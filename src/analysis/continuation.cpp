@@ -74,7 +74,7 @@ Eval evaluate(const ModelFamily& family, const SectionChart& chart, VecIn xi, do
 
 /// Everything about the orbit through x at lambda (x on its section's constraints).
 bool make_point(const ModelFamily& family, double lambda, VecIn x, const ContinuationOptions& opt,
-                PointData& out, std::string& why, long& runs) {
+                PointData& out, std::string& why, long& runs, const std::string* expect = nullptr) {
   ParameterModel pm = family(lambda);
   const PeriodMap map(*pm.model, pm.t0, pm.options);
   const FlowRun run = map.run(x, pm.period);
@@ -85,6 +85,17 @@ bool make_point(const ModelFamily& family, double lambda, VecIn x, const Continu
     return false;
   }
   const Vec xs = stacked_state(run.samples.front());
+  if (expect && event_signature(run, pm.t0) != *expect) {
+    // the orbit's events changed (a grazing, a lift-off at the section): no chart of the
+    // previous phases, no smooth continuation; the point is reported as it is
+    out.p.lambda = lambda;
+    out.p.period = pm.period;
+    out.p.x0 = xs;
+    out.p.signature = event_signature(run, pm.t0);
+    out.p.floquet.reason = "not computed: the orbit's events changed";
+    out.chart.reset();
+    return true;
+  }
   const Vec D = state_scale(*pm.model, pm.omega);
   out.chart = std::make_unique<SectionChart>(*pm.model, pm.t0, xs, start_phases(run), D);
   const SectionChart& chart = *out.chart;
@@ -274,9 +285,23 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
                                               "{:.10g}]",
                                               lambda, opt.lambda_min, opt.lambda_max));
     PointData next;
-    if (!make_point(family, lambda, stacked_state(c.eval.run.samples.front()), opt, next, why,
-                    runs))
+    if (!make_point(family, lambda, stacked_state(c.eval.run.samples.front()), opt, next, why, runs,
+                    &cur.p.signature))
       return done("step_failed", why);
+    if (!next.chart) {  // the events changed: the branch of smooth orbits ends here
+      BranchSpecial s;
+      s.kind = "events_change";
+      s.after = static_cast<int>(b.points.size()) - 1;
+      s.lambda = lambda;
+      s.how = "the orbit's events are [" + next.p.signature + "] instead of [" + cur.p.signature +
+              "]: a grazing or lift-off between the two points, where the branch of smooth "
+              "orbits ends";
+      next.p.arclength = cur.p.arclength + std::abs(ds);
+      next.p.runs = runs - runs_before;
+      b.points.push_back(next.p);
+      b.specials.push_back(s);
+      return done("events_change", s.how);
+    }
     // orientation: along the secant from the current point, in the new chart's coordinates
     const int dn = next.chart->dim();
     Vec sec(dn + 1);

@@ -232,7 +232,8 @@ std::string orbit_csv(const CaseOrbit& o) {
   return s;
 }
 
-std::unique_ptr<HeldFolder> open_orbit_folder(const std::string& dir, const CaseSpec& spec) {
+std::unique_ptr<HeldFolder> open_orbit_folder(const std::string& dir, const CaseSpec& spec,
+                                              const std::vector<std::string>& files) {
   auto folder = std::make_unique<HeldFolder>(dir);
   if (!folder->try_lock(true))
     throw FolderError(
@@ -240,7 +241,8 @@ std::unique_ptr<HeldFolder> open_orbit_folder(const std::string& dir, const Case
                     "lock); choose another --out or wait for it to end",
                     dir));
   folder->check_writable();
-  for (const char* name : {"orbit.json", "orbit.csv"}) {
+  for (const std::string& f : files) {
+    const char* name = f.c_str();
     struct stat st {};
     if (::fstatat(folder->fd(), name, &st, AT_SYMLINK_NOFOLLOW) != 0 || !S_ISREG(st.st_mode))
       continue;
@@ -260,6 +262,142 @@ void write_orbit_files(const HeldFolder& folder, const CaseSpec& spec, const Cas
   const std::string& dir = folder.path();
   write_file_at(folder.fd(), "orbit.csv", dir + "/orbit.csv", orbit_csv(o));
   write_file_at(folder.fd(), "orbit.json", dir + "/orbit.json", orbit_json(spec, o));
+}
+
+std::vector<CaseIssue> branch_issues(const CaseSpec& spec, const CaseBranchOptions& o) {
+  std::vector<CaseIssue> bad = forced_orbit_issues(spec, o.orbit);
+  const std::string cl = "command line";
+  bool numeric = false;
+  for (const auto& e : case_values(spec))
+    if (e.full() == o.key) numeric = std::holds_alternative<double>(e.value);
+  if (!numeric)
+    bad.push_back({cl, 0, "--vary", o.key,
+                   "must name a real-valued key of this case (section.key, as in "
+                   "case.resolved.toml)"});
+  if (o.points < 2)
+    bad.push_back({cl, 0, "--points", std::to_string(o.points), "must be an integer >= 2"});
+  if (!(o.ds > 0.0) || !std::isfinite(o.ds))
+    bad.push_back({cl, 0, "--ds", fmt::format("{}", o.ds), "must be finite and > 0"});
+  if (!(o.ds_max >= o.ds) || !std::isfinite(o.ds_max))
+    bad.push_back({cl, 0, "--ds-max", fmt::format("{}", o.ds_max), "must be finite and >= --ds"});
+  if (!(o.scale >= 0.0) || !std::isfinite(o.scale))
+    bad.push_back({cl, 0, "--scale", fmt::format("{}", o.scale), "must be finite and >= 0"});
+  if (std::isinf(o.to)) bad.push_back({cl, 0, "--to", fmt::format("{}", o.to), "must be finite"});
+  return bad;
+}
+
+CaseBranch find_case_branch(const std::string& text, const std::string& source,
+                            const std::vector<std::string>& overrides, const CaseBranchOptions& o) {
+  const CaseSpec spec = parse_case(text, source, overrides);
+  if (auto bad = branch_issues(spec, o); !bad.empty()) throw CaseError(std::move(bad));
+  CaseBranch out;
+  out.key = o.key;
+  for (const auto& e : case_values(spec))
+    if (e.full() == o.key) out.lambda0 = std::get<double>(e.value);
+  const auto model = build_model(spec);
+  for (const auto& c : model->coordinates()) out.state_names.push_back(c.name);
+  for (const auto& c : model->coordinates()) out.state_names.push_back(c.rate);
+  const int k = o.orbit.periods;
+  const std::atomic<bool>* stop = o.orbit.stop;
+  const ModelFamily family = [&text, &source, &overrides, key = o.key, k, stop](double lambda) {
+    std::vector<std::string> sets = overrides;
+    sets.push_back(fmt::format("{}={}", key, lambda));
+    const CaseSpec s = parse_case(text, source, sets);
+    if (auto bad = forced_orbit_issues(s, CaseOrbitOptions{}); !bad.empty())
+      throw CaseError(std::move(bad));
+    ParameterModel pm;
+    pm.model = build_model(s);
+    const MechanicalState s0 = initial_state(s);
+    pm.t0 = s0.t;
+    pm.omega = std::abs(pm.model->spin(s0.t, s0.q, s0.v));
+    pm.period = 2.0 * std::numbers::pi * k / pm.omega;
+    pm.options = event_driven_options(s);
+    pm.options.stop = stop;
+    return pm;
+  };
+  ContinuationOptions c;
+  c.ds = o.ds;
+  c.ds_max = o.ds_max;
+  c.lambda_scale = o.scale > 0 ? o.scale : (out.lambda0 != 0 ? 0.01 * std::abs(out.lambda0) : 1);
+  c.max_points = o.points;
+  c.direction = o.direction;
+  if (std::isfinite(o.to)) (o.to >= out.lambda0 ? c.lambda_max : c.lambda_min) = o.to;
+  c.orbit = o.orbit.orbit;
+  c.orbit.samples = std::min(c.orbit.samples, 50);  // the amplitude and forces: 50 per period
+  const MechanicalState s0 = initial_state(spec);
+  Vec x(2 * model->num_dofs());
+  x << s0.q, s0.v;
+  out.branch = continue_forced_orbit(family, out.lambda0, x, c);
+  return out;
+}
+
+std::string branch_csv(const CaseBranch& b) {
+  std::size_t nm = 0;
+  for (const auto& p : b.branch.points) nm = std::max(nm, p.floquet.multipliers.size());
+  std::string s = "point,";
+  s += b.key;
+  s += ",arclength,period,amplitude,F_N_max,F_N_min,residual,stability,mu_max_abs";
+  for (std::size_t j = 1; j <= nm; ++j)
+    s += fmt::format(",mu{0}_re,mu{0}_im,mu{0}_abs,mu{0}_error", j);
+  s += ",corrector_iterations,runs";
+  for (const auto& n : b.state_names) {
+    s += ',';
+    s += n;
+  }
+  s += ",events\n";
+  auto out = std::back_inserter(s);
+  for (std::size_t i = 0; i < b.branch.points.size(); ++i) {
+    const BranchPoint& p = b.branch.points[i];
+    const auto& F = p.floquet.multipliers;
+    fmt::format_to(out, "{},{},{},{},{},{},{},{},{},{}", i, p.lambda, p.arclength, p.period,
+                   p.amplitude, p.F_N_max, p.F_N_min, p.residual, to_string(p.floquet.stability),
+                   F.empty() ? 0.0 : std::abs(F.front().value));
+    for (std::size_t j = 0; j < nm; ++j) {
+      if (j < F.size())
+        fmt::format_to(out, ",{},{},{},{}", F[j].value.real(), F[j].value.imag(),
+                       std::abs(F[j].value), F[j].error);
+      else
+        s += ",,,,";
+    }
+    fmt::format_to(out, ",{},{}", p.corrector_iterations, p.runs);
+    for (Eigen::Index j = 0; j < p.x0.size(); ++j) fmt::format_to(out, ",{}", p.x0(j));
+    s += ',';
+    s += quoted_string(p.signature);
+    s += '\n';
+  }
+  return s;
+}
+
+std::string branch_json(const CaseBranch& b) {
+  const Branch& r = b.branch;
+  std::string s;
+  auto out = std::back_inserter(s);
+  fmt::format_to(out,
+                 "{{\n  \"key\": {},\n  \"from\": {},\n  \"outcome\": {},\n  \"message\": {},\n"
+                 "  \"points\": {},\n  \"specials\": [",
+                 str(b.key), num(b.lambda0), str(r.outcome), str(r.message), r.points.size());
+  for (std::size_t i = 0; i < r.specials.size(); ++i) {
+    const auto& x = r.specials[i];
+    fmt::format_to(out,
+                   "{}\n    {{\"kind\": {}, \"value\": {}, \"between\": [{}, {}], \"how\": {}}}",
+                   i ? "," : "", str(x.kind), num(x.lambda), x.after, x.after + 1, str(x.how));
+  }
+  fmt::format_to(out, "\n  ],\n  \"runs\": {},\n  \"wall_seconds\": {}\n}}\n", r.runs,
+                 num(r.wall_seconds));
+  return s;
+}
+
+void write_branch_files(const HeldFolder& folder, const CaseBranch& b) {
+  const std::string& dir = folder.path();
+  write_file_at(folder.fd(), "branch.csv", dir + "/branch.csv", branch_csv(b));
+  write_file_at(folder.fd(), "branch.json", dir + "/branch.json", branch_json(b));
+}
+
+int exit_code(const CaseBranch& b) {
+  const std::string& o = b.branch.outcome;
+  if (o == "max_points" || o == "lambda_bound" || o == "events_change") return kExitOk;
+  if (b.branch.message.find("interrupted") != std::string::npos) return kExitInterrupted;
+  return kExitEarlyEnd;
 }
 
 int exit_code(const OrbitResult& r) {

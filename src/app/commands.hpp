@@ -17,5 +17,6 @@ void add_compare_command(CLI::App& app, Action& action);
 void add_analyze_command(CLI::App& app, Action& action);
 void add_sweep_commands(CLI::App& app, Action& action);
 void add_orbit_command(CLI::App& app, Action& action);
+void add_branch_command(CLI::App& app, Action& action);
 
 }  // namespace rubdyn::app

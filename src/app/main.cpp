@@ -30,6 +30,7 @@ int main(int argc, char** argv) {
   rubdyn::app::add_analyze_command(app, action);
   rubdyn::app::add_sweep_commands(app, action);
   rubdyn::app::add_orbit_command(app, action);
+  rubdyn::app::add_branch_command(app, action);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

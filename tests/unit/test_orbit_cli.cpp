@@ -148,3 +148,29 @@ TEST_CASE("rubdyn orbit --from: the section at the end of a transient run", "[or
   fs::remove_all(run);
   fs::remove_all(dir);
 }
+
+TEST_CASE("rubdyn branch: a few points of the full rub's branch, and bad input", "[orbit][cli]") {
+  const fs::path dir = fresh_dir("branch");
+  const CliOutcome r =
+      cli("branch " + sh(kCase) + " --vary initial.omega0 --points 4 --out " + sh(dir.string()));
+  INFO(r.out << r.err);
+  REQUIRE(r.code == 0);
+  const std::string js = slurp(dir / "branch.json");
+  CHECK(has(js, "\"outcome\": \"max_points\""));
+  CHECK(has(js, "\"points\": 4"));
+  const auto rows = csv(slurp(dir / "branch.csv"));
+  REQUIRE(rows.size() == 5);
+  CHECK(rows[0][1] == "initial.omega0");
+  CHECK(std::stod(rows[1][1]) == 1500.0);
+  for (std::size_t i = 2; i < rows.size(); ++i) {  // increasing speed, all stable
+    CHECK(std::stod(rows[i][1]) > std::stod(rows[i - 1][1]));
+    CHECK(rows[i][8] == "stable");
+  }
+  fs::remove_all(dir);
+  const CliOutcome b =
+      cli("branch " + sh(kCase) + " --vary rotor.nonsense --points 1 --out " + sh(dir.string()));
+  CHECK(b.code == 2);
+  CHECK(has(b.err, "--vary"));
+  CHECK(has(b.err, "--points"));
+  CHECK_FALSE(fs::exists(dir));
+}

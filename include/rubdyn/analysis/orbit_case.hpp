@@ -3,10 +3,12 @@
 // the first guess, its solver settings for the runs of the return map, and the output folder's
 // files (orbit.csv, orbit.json, case.resolved.toml). The method is analysis/orbit.hpp's.
 #include <atomic>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "rubdyn/analysis/continuation.hpp"
 #include "rubdyn/analysis/orbit.hpp"
 #include "rubdyn/io/case_error.hpp"
 #include "rubdyn/io/case_spec.hpp"
@@ -53,15 +55,58 @@ std::string orbit_json(const CaseSpec& spec, const CaseOrbit& o);
 /// (io/columns.hpp), one row per sample (the orbit's output grid and both sides of each event).
 std::string orbit_csv(const CaseOrbit& o);
 
-/// Creates, locks and prepares the output folder of an orbit before the search: checks that it
-/// can be written, removes an earlier search's orbit.json and orbit.csv (they would describe
-/// another search next to this one's case) and writes case.resolved.toml. Throws FolderError
-/// (in use by another rubdyn command, not writable) with nothing written.
-std::unique_ptr<HeldFolder> open_orbit_folder(const std::string& dir, const CaseSpec& spec);
+/// Creates, locks and prepares the output folder of an orbit (or a branch) before the search:
+/// checks that it can be written, removes an earlier search's result files (`files`; they would
+/// describe another search next to this one's case) and writes case.resolved.toml. Throws
+/// FolderError (in use by another rubdyn command, not writable) with nothing written.
+std::unique_ptr<HeldFolder> open_orbit_folder(const std::string& dir, const CaseSpec& spec,
+                                              const std::vector<std::string>& files = {
+                                                  "orbit.json", "orbit.csv"});
 
 /// Writes orbit.csv and orbit.json into the folder open_orbit_folder prepared. Throws
 /// OutputError naming the file that could not be written.
 void write_orbit_files(const HeldFolder& folder, const CaseSpec& spec, const CaseOrbit& o);
+
+/// A branch of forced orbits of a case in one of its numeric keys (rubdyn branch).
+struct CaseBranchOptions {
+  std::string key;  ///< the case key varied, e.g. "initial.omega0"
+  double to = std::numeric_limits<double>::quiet_NaN();  ///< stop beyond this value (NaN: none)
+  int points = 200;
+  double ds = 0.5, ds_max = 3.0;
+  double scale = 0.0;  ///< the key's unit in the arclength (0: 1 % of its value, or 1)
+  int direction = +1;  ///< the first step's sign in the key
+  CaseOrbitOptions orbit;
+};
+
+/// Every reason the case and options cannot give a branch (forced_orbit_issues, the key a
+/// number of the case, points >= 2, ds > 0, ...).
+std::vector<CaseIssue> branch_issues(const CaseSpec& spec, const CaseBranchOptions& o);
+
+struct CaseBranch {
+  std::string key;
+  double lambda0 = 0.0;
+  std::vector<std::string> state_names;  ///< the orbit state's coordinates and rates
+  Branch branch;
+};
+
+/// Follows the case's forced orbit in o.key from its value in the case, re-reading the case from
+/// `text` (the file's text, `source` its name) with `overrides` and key = value at every value.
+/// Throws CaseError on bad input.
+CaseBranch find_case_branch(const std::string& text, const std::string& source,
+                            const std::vector<std::string>& overrides, const CaseBranchOptions& o);
+
+/// branch.csv: one row per point (the key's value, arclength, period, the orbit's amplitude and
+/// normal forces, residual, stability, each multiplier's re, im, abs and error, the corrector's
+/// iterations, runs, the state at the section by name, the event signature).
+std::string branch_csv(const CaseBranch& b);
+/// branch.json: the key, outcome, message, special points (kind, value, between which points,
+/// how located), points, runs, wall time.
+std::string branch_json(const CaseBranch& b);
+/// Writes branch.csv and branch.json into the folder open_orbit_folder prepared.
+void write_branch_files(const HeldFolder& folder, const CaseBranch& b);
+/// 0 when the branch ended as asked (its points, a bound, where its events change); 3 when a
+/// step or the start failed; 4 when interrupted.
+int exit_code(const CaseBranch& b);
 
 /// The CLI's exit code of a search: 0 converged; 4 a run stopped by SIGINT or its wall budget;
 /// 3 otherwise (every other outcome, kept on disk).
