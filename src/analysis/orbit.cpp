@@ -258,7 +258,9 @@ Mat SectionChart::jacobian(const LagrangianModel& mdl, VecIn x) const {
   return J;
 }
 
-bool SectionChart::embed(VecIn xi, Vec& x) const { return embed_on(m_, xi, x); }
+bool SectionChart::embed(VecIn xi, Vec& x) const {
+  return embed_on(m_, xi, x);
+}
 
 bool SectionChart::embed_on(const LagrangianModel& model, VecIn xi, Vec& x) const {
   const Vec s0 = B_ * xi;
@@ -489,7 +491,7 @@ std::string_view to_string(Stability s) {
   }
 }
 
-FloquetAnalysis floquet_analysis(const Monodromy& m, MatIn tangent, VecIn scale) {
+FloquetAnalysis floquet_analysis(const Monodromy& m, MatIn tangent, VecIn scale, bool autonomous) {
   FloquetAnalysis out;
   if (!m.ok) {
     out.reason = "no monodromy: " + m.failure;
@@ -527,12 +529,29 @@ FloquetAnalysis floquet_analysis(const Monodromy& m, MatIn tangent, VecIn scale)
   std::stable_sort(
       out.multipliers.begin(), out.multipliers.end(),
       [](const auto& a, const auto& b) { return std::abs(a.value) > std::abs(b.value); });
+  if (autonomous) {
+    for (std::size_t i = 0; i < out.multipliers.size(); ++i) {
+      const auto& f = out.multipliers[i];
+      if (f.value.imag() != 0.0) continue;
+      if (out.trivial < 0 ||
+          std::abs(f.value.real() - 1.0) <
+              std::abs(out.multipliers[static_cast<std::size_t>(out.trivial)].value.real() - 1.0))
+        out.trivial = static_cast<int>(i);
+    }
+    if (out.trivial >= 0) {
+      const auto& f = out.multipliers[static_cast<std::size_t>(out.trivial)];
+      out.trivial_ok = std::abs(f.value - 1.0) <= f.error;
+    }
+  }
+  auto skip = [&](std::size_t i) { return static_cast<int>(i) == out.trivial; };
+  const std::string others = out.trivial >= 0 ? " (the trivial multiplier set apart)" : "";
   if (m.sequence_changed) {
     out.reason = "the events change within the differences' steps: " + m.sequence_note;
     return out;
   }
   for (std::size_t i = 0; i < out.multipliers.size(); ++i) {
     const auto& f = out.multipliers[i];
+    if (skip(i)) continue;
     if (std::abs(f.value) - f.error > 1.0) {
       out.stability = Stability::Unstable;
       out.reason = fmt::format(
@@ -543,6 +562,7 @@ FloquetAnalysis floquet_analysis(const Monodromy& m, MatIn tangent, VecIn scale)
   }
   for (std::size_t i = 0; i < out.multipliers.size(); ++i) {
     const auto& f = out.multipliers[i];
+    if (skip(i)) continue;
     if (!(std::abs(f.value) + f.error < 1.0)) {
       out.reason = fmt::format(
           "multiplier {} = {:.6g}{:+.6g}i, |.| = {:.6g}, is within its error {:.2g} of the unit "
@@ -551,11 +571,18 @@ FloquetAnalysis floquet_analysis(const Monodromy& m, MatIn tangent, VecIn scale)
       return out;
     }
   }
-  const auto& f = out.multipliers.front();
+  std::size_t first = 0;
+  while (first < out.multipliers.size() && skip(first)) ++first;
+  if (first == out.multipliers.size()) {
+    out.stability = Stability::Stable;
+    out.reason = "no multiplier but the trivial one";
+    return out;
+  }
+  const auto& f = out.multipliers[first];
   out.stability = Stability::Stable;
   out.reason =
-      fmt::format("every |multiplier| + its error < 1 (largest |.| = {:.6g}, error {:.2g})",
-                  std::abs(f.value), f.error);
+      fmt::format("every |multiplier| + its error < 1{} (largest |.| = {:.6g}, error {:.2g})",
+                  others, std::abs(f.value), f.error);
   return out;
 }
 
@@ -825,6 +852,208 @@ OrbitResult find_forced_orbit(const PeriodMap& map, VecIn guess, double T, doubl
   return finish(OrbitOutcome::Converged,
                 fmt::format("converged in {} Newton iterations, residual {:.3g}",
                             res.history.size() - 1 - static_cast<std::size_t>(it0), res.residual));
+}
+
+// ---- autonomous orbits ------------------------------------------------------------------------
+
+OrbitResult find_autonomous_orbit(const PeriodMap& map, VecIn guess, double T0, double omega_ref,
+                                  const std::vector<int>& pinned, const OrbitOptions& opt) {
+  const auto clock0 = std::chrono::steady_clock::now();
+  const long runs0 = map.runs();
+  OrbitResult res;
+  res.t0 = map.t0();
+  res.period = T0;
+  res.x0 = guess;
+  const LagrangianModel& model = map.model();
+  const Vec D = state_scale(model, omega_ref);
+  auto finish = [&](OrbitOutcome o, std::string msg) {
+    res.outcome = o;
+    res.message = std::move(msg);
+    if (res.orbit.samples.empty() && res.x0.size() == map.state_size() && opt.samples > 0)
+      describe_orbit(map, res.period, opt.samples, res);
+    if (res.floquet.reason.empty())
+      res.floquet.reason =
+          "no multipliers: the search ended without an orbit (" + std::string(to_string(o)) + ")";
+    res.runs = map.runs() - runs0;
+    res.wall_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - clock0).count();
+    return res;
+  };
+  // the guess's run, sampled a hundred times: the flow's direction at the start
+  FlowRun run = map.run(guess, T0, T0 / 100.0);
+  if (!run.complete() || run.samples.size() < 2) {
+    res.run_termination = run.summary.termination;
+    return finish(OrbitOutcome::RunFailed,
+                  "the run from the initial guess ended early: " + run.summary.message);
+  }
+  const Vec xb = stacked_state(run.samples.front());
+  res.x0 = xb;
+  const SectionChart chart(model, res.t0, xb, start_phases(run), D, pinned);
+  const int d = chart.dim();
+  // the phase condition: the coordinate along which the flow moves fastest at the base
+  const Sample* next = nullptr;  // the first sample after the start
+  for (const Sample& s : run.samples)
+    if (s.t > res.t0) {
+      next = &s;
+      break;
+    }
+  if (!next) return finish(OrbitOutcome::RunFailed, "no sample after the start");
+  const Vec flow = chart.coords(stacked_state(*next)) / (next->t - res.t0);
+  Eigen::Index j_fixed = 0;
+  flow.cwiseAbs().maxCoeff(&j_fixed);
+  const int j = static_cast<int>(j_fixed);
+  // unknowns v = (xi without j, T / T0); residual r = coords(P_T(embed(xi))) - xi
+  auto expand = [&](const Vec& v) {
+    Vec xi(d);
+    for (int i = 0, k = 0; i < d; ++i) xi(i) = i == j ? 0.0 : v(k++);
+    return xi;
+  };
+  struct Eval {
+    bool ok = false;
+    FlowRun run;
+    Vec r;
+    double res = 0.0;
+    std::string why;
+  };
+  auto evaluate = [&](const Vec& v) {
+    Eval e;
+    const Vec xi = expand(v);
+    Vec x;
+    if (!chart.embed(xi, x)) {
+      e.why = "an iterate could not be put on the constraints of the section";
+      return e;
+    }
+    e.run = map.run(x, v(d - 1) * T0);
+    if (!e.run.complete()) {
+      e.why = fmt::format("a run ended early ({}): {}", to_string(e.run.summary.termination),
+                          e.run.summary.message);
+      return e;
+    }
+    e.r = chart.coords(stacked_state(e.run.samples.back())) - xi;
+    e.res = chart.scaled_distance(stacked_state(e.run.samples.front()),
+                                  stacked_state(e.run.samples.back()));
+    e.ok = true;
+    return e;
+  };
+  Vec v = Vec::Zero(d);
+  v(d - 1) = 1.0;
+  Eval cur = evaluate(v);
+  if (!cur.ok) return finish(OrbitOutcome::RunFailed, cur.why);
+  Mat J;
+  bool have_J = false;
+  const FiniteDifferenceMonodromy newton_fd({opt.newton_step});
+  for (int it = 0;; ++it) {
+    NewtonRecord rec;
+    rec.iteration = it;
+    rec.residual = cur.res;
+    rec.signature = event_signature(cur.run, res.t0);
+    res.residual = cur.res;
+    res.period = v(d - 1) * T0;
+    res.x0 = stacked_state(cur.run.samples.front());
+    if (cur.res <= opt.tol) {
+      rec.runs = map.runs() - runs0;
+      res.history.push_back(rec);
+      break;
+    }
+    if (it >= opt.max_iterations) {
+      rec.runs = map.runs() - runs0;
+      res.history.push_back(rec);
+      return finish(OrbitOutcome::NoConvergence,
+                    fmt::format("no convergence in {} Newton iterations: residual {:.3g} > tol "
+                                "{:.3g}",
+                                opt.max_iterations, cur.res, opt.tol));
+    }
+    if (!have_J) {
+      // d(coords P)/d xi by the finite differences, d/dT by central differences in T
+      const Monodromy mj = newton_fd.compute(map, res.period, chart, expand(v), cur.run);
+      if (!mj.ok) return finish(OrbitOutcome::RunFailed, "Newton's Jacobian: " + mj.failure);
+      const double h = opt.newton_step;
+      Vec vp = v, vm = v;
+      vp(d - 1) += h;
+      vm(d - 1) -= h;
+      const Eval ep = evaluate(vp), em = evaluate(vm);
+      if (!ep.ok || !em.ok)
+        return finish(OrbitOutcome::RunFailed, "Newton's Jacobian: " + (ep.ok ? em.why : ep.why));
+      J.resize(d, d);
+      const Mat A = mj.M - Mat::Identity(d, d);
+      for (int i = 0, k = 0; i < d; ++i)
+        if (i != j) J.col(k++) = A.col(i);
+      J.col(d - 1) = (ep.r - em.r) / (2.0 * h);
+      have_J = true;
+      rec.jacobian = "finite differences";
+    } else {
+      rec.jacobian = "broyden";
+    }
+    const Eigen::JacobiSVD<Mat> svd(J);
+    const auto& sv = svd.singularValues();
+    if (!(sv(sv.size() - 1) > kSingularRcond * sv(0))) {
+      rec.runs = map.runs() - runs0;
+      res.history.push_back(rec);
+      return finish(OrbitOutcome::NotIsolated,
+                    "the Newton system is singular: the phase condition does not fix the orbit, "
+                    "or a second multiplier is at +1");
+    }
+    const Vec step = J.colPivHouseholderQr().solve(-cur.r);
+    double lambda = 1.0;
+    Eval nxt;
+    for (int h = 0; h <= kMaxHalvings; ++h, lambda *= 0.5) {
+      nxt = evaluate(v + lambda * step);
+      if (nxt.ok && (nxt.res < cur.res || h == kMaxHalvings)) break;
+    }
+    rec.damping = lambda;
+    rec.runs = map.runs() - runs0;
+    if (!nxt.ok) {
+      res.history.push_back(rec);
+      return finish(OrbitOutcome::RunFailed, nxt.why);
+    }
+    const Vec s = lambda * step;
+    rec.step = s.cwiseAbs().maxCoeff();
+    res.history.push_back(rec);
+    if (nxt.res < cur.res && lambda == 1.0 && nxt.res <= 0.5 * cur.res)
+      J += ((nxt.r - cur.r) - J * s) * s.transpose() / s.squaredNorm();
+    else
+      have_J = false;
+    v += s;
+    cur = std::move(nxt);
+  }
+  // the orbit: the monodromy at T in the chart based on it
+  const Vec x = stacked_state(cur.run.samples.front());
+  res.x0 = x;
+  res.section_phases = start_phases(cur.run);
+  const SectionChart at(model, res.t0, x, res.section_phases, D, pinned);
+  res.chart_dim = at.dim();
+  res.constraints = at.constraint_count();
+  const FiniteDifferenceMonodromy fd(opt.fd_steps);
+  const Vec zero = Vec::Zero(at.dim());
+  const Mat tangent = at.tangent(zero);
+  res.monodromy = opt.provider ? opt.provider->compute(map, res.period, at, zero, cur.run)
+                               : fd.compute(map, res.period, at, zero, cur.run);
+  res.floquet = floquet_analysis(res.monodromy, tangent, D, true);
+  for (int k = 0;
+       k < opt.fd_refinements && !opt.provider && res.floquet.stability == Stability::Undecided &&
+       fd.refine(map, res.period, at, zero, cur.run, res.monodromy);
+       ++k)
+    res.floquet = floquet_analysis(res.monodromy, tangent, D, true);
+  if (opt.samples > 0) {
+    describe_orbit(map, res.period, opt.samples, res);
+    if (!res.orbit.complete()) {
+      res.run_termination = res.orbit.summary.termination;
+      return finish(OrbitOutcome::RunFailed, "the sampled run on the orbit ended early");
+    }
+  } else {
+    set_orbit(res, cur.run, res.t0);
+  }
+  if (!res.monodromy.ok)
+    return finish(OrbitOutcome::RunFailed, "monodromy: " + res.monodromy.failure);
+  if (res.monodromy.sequence_changed)
+    return finish(OrbitOutcome::SequenceChanged,
+                  "the orbit converged, but its events change within the finite differences' "
+                  "steps: " +
+                      res.monodromy.sequence_note);
+  return finish(OrbitOutcome::Converged,
+                fmt::format("converged in {} Newton iterations, residual {:.3g}, period {:.10g} "
+                            "s (phase condition on section coordinate {})",
+                            res.history.size() - 1, res.residual, res.period, j + 1));
 }
 
 }  // namespace rubdyn

@@ -601,3 +601,100 @@ TEST_CASE(
   CHECK(m0 < 1.0);
   CHECK(m1 > 1.0);
 }
+
+// Step 5 of issue 33: autonomous orbits. Black's rolling orbits (docs/closed-forms.md 3, the set
+// BLACK_ROLL: both branches of the bistable sprung-stator case) under a constant torque: the
+// period is an unknown, the spin angle cyclic (pinned), the trivial multiplier 1.
+TEST_CASE(
+    "orbit: Black's rolling orbits as autonomous orbits, both branches, with the trivial "
+    "multiplier",
+    "[orbit]") {
+  const double m_r = 5, k_r = 5e6, c_r = 600, R = 0.05, m_s = 2, k_s = 2e7, c_s = 400, g0 = 5e-4,
+               tau = 40;
+  const std::string text = R"(name = "black-roll"
+[model]
+kind = "jeffcott"
+[rotor]
+mass = 5.0
+k = 5.0e6
+c = 600.0
+radius = 0.05
+Jp = 0.01
+[stator]
+mass = 2.0
+k = 2.0e7
+c = 400.0
+gap = 5.0e-4
+[contact]
+mu = 0.3
+e_n = 0.0
+e_t = 0.0
+[loads]
+gravity = 0.0
+torque = 40.0
+[run]
+t_end = 0.01
+omega_lim = 2000.0
+[solver]
+kind = "event"
+rtol = 1e-12
+atol = 1e-15
+[output]
+dt = 1e-4
+)";
+  const CaseSpec spec = parse_case(text, "black-roll.toml");
+  const auto model = build_model(spec);
+  const PeriodMap map(*model, 0.0, event_driven_options(spec));
+  auto K = [&](double w) {
+    const cplx Dr = D(m_r, k_r, c_r, w), Ds = D(m_s, k_s, c_s, w);
+    return Dr * Ds / (Dr + Ds);
+  };
+  // (3.1): Im K(w) = -tau / (R g0), by Newton from the table's roots of closed-forms.md 3.3
+  // (w from the table, the slowest eigenvalue of the orbit in the rotating frame from
+  // validation/analytic/reference_sim.py, the table's 4 digits)
+  const std::pair<double, double> branches[] = {{-1370.016, -36.76}, {-5932.803, -42.11}};
+  for (const auto& [w_table, slowest] : branches) {
+    double w = w_table;
+    for (int it = 0; it < 50; ++it) {
+      const double h = 1e-6 * std::abs(w);
+      const double f = K(w).imag() + tau / (R * g0);
+      const double df = (K(w + h).imag() - K(w - h).imag()) / (2 * h);
+      w -= f / df;
+    }
+    INFO("root w = " << w);
+    REQUIRE(std::abs(w / w_table - 1) <= 1e-6);
+    // the orbit's state (validation/analytic/closed_forms.py contact_orbit_state, phi0 = 0)
+    const cplx r = g0, F = K(w) * r, zs = -F / D(m_s, k_s, c_s, w), zr = zs + r;
+    const cplx I(0, 1);
+    const cplx vr = I * w * zr, vs = I * w * zs;
+    const double Omega = -(g0 / R) * w;
+    Vec x(10);
+    x << zr.real(), zr.imag(), 0.0, zs.real(), zs.imag(), vr.real(), vr.imag(), Omega, vs.real(),
+        vs.imag();
+    const double T = 2 * std::numbers::pi / std::abs(w);
+    // start from a period guess 1 % off: Newton must find the period
+    const OrbitResult o =
+        find_autonomous_orbit(map, x, 1.01 * T, std::abs(w), {model->spin_coordinate()}, {});
+    INFO(o.message << "; " << o.floquet.reason);
+    REQUIRE(o.converged());
+    CHECK(o.section_phases == std::vector<Phase>{Phase::Stick});  // rolling
+    CHECK(o.chart_dim == 6);  // 10 components - 3 constraints (d_N, v_N, v_t) - theta
+    // the period of the closed form: measured 5.2e-10 (low) and 3.6e-9 (high) relative; bound
+    // 1e-8, Newton's tolerance on the state over a whirl period
+    CHECK(std::abs(o.period / T - 1) <= 1e-8);
+    // the trivial multiplier is 1 within its error bound (measured 1 + 4e-7 +- 1.7e-5 and
+    // 1 + 1e-9 +- 2.8e-3: the high branch's is close to a second real multiplier, 0.956, which
+    // makes both ill-conditioned); both branches are stable (section 3.3)
+    REQUIRE(o.floquet.trivial >= 0);
+    CHECK(o.floquet.trivial_ok);
+    CHECK(o.floquet.stability == Stability::Stable);
+    // the largest non-trivial |multiplier| is exp(lambda T) of the slowest eigenvalue: within
+    // its error bound plus the table's rounding (0.005 / s over T: 2.3e-5 and 5e-6)
+    double top = 0.0, err = 0.0;
+    for (std::size_t i = 0; i < o.floquet.multipliers.size(); ++i)
+      if (static_cast<int>(i) != o.floquet.trivial &&
+          std::abs(o.floquet.multipliers[i].value) > top)
+        top = std::abs(o.floquet.multipliers[i].value), err = o.floquet.multipliers[i].error;
+    CHECK(std::abs(top - std::exp(slowest * T)) <= err + 0.005 * T);
+  }
+}

@@ -245,9 +245,16 @@ struct FloquetAnalysis {
   std::vector<FloquetMultiplier> multipliers;
   Stability stability = Stability::Undecided;
   std::string reason;  ///< one line: why this verdict
+  /// An autonomous orbit's trivial multiplier (along the flow: exactly 1), the real one nearest
+  /// 1: its index in `multipliers` (-1: a forced orbit), left out of the verdict; and whether it
+  /// is 1 within its error bound (a check of the monodromy).
+  int trivial = -1;
+  bool trivial_ok = false;
 };
 /// `tangent`: the chart's tangent(xi) at the orbit (to express the eigenvectors as states).
-FloquetAnalysis floquet_analysis(const Monodromy& m, MatIn tangent, VecIn scale);
+/// `autonomous`: the orbit of an autonomous flow, whose trivial multiplier is set apart.
+FloquetAnalysis floquet_analysis(const Monodromy& m, MatIn tangent, VecIn scale,
+                                 bool autonomous = false);
 
 /// How a search for an orbit ended. Everything but Converged is exit 3 in the CLI (a run
 /// stopped by SIGINT or the wall budget: exit 4).
@@ -323,6 +330,16 @@ struct OrbitResult {
 
 /// The state scale D of a model: positions per the gap scale L, velocities per L omega_ref.
 Vec state_scale(const LagrangianModel& model, double omega_ref);
+
+/// An autonomous orbit (a free spin under a torque law: the flow does not depend on time) of
+/// unknown period, from the guess x and the period guess T0. The components `pinned` (the spin
+/// angle, cyclic without an unbalance) are left out of the section's coordinates and need not
+/// close. Unknowns: the section's coordinates but one, fixed by the phase condition xi_j = 0
+/// (j the coordinate along which the flow moves fastest at the guess: the section is the
+/// hyperplane through the base state across the flow), and T. The monodromy then has the
+/// trivial multiplier 1, set apart from the verdict and checked against 1.
+OrbitResult find_autonomous_orbit(const PeriodMap& map, VecIn guess, double T0, double omega_ref,
+                                  const std::vector<int>& pinned, const OrbitOptions& opt);
 
 /// A forced orbit of period T (a T-periodic model: a prescribed constant spin with T = 2 pi k /
 /// Omega) by Newton from the guess x = (q, v) at t0. Never throws for numerical trouble: the
