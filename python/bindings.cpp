@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <fstream>
 #include <future>
+#include <limits>
 #include <optional>
 #include <string>
 #include <utility>
@@ -221,9 +222,10 @@ py::tuple run_case(const Case& c, const py::object& progress, double progress_in
 /// as run_case runs (Ctrl-C raises the stop flag; the search ends at its running run). Returns
 /// (orbit.json's text, the sampled period's columns, its events, its summary.json, the
 /// monodromy matrix, the CLI's exit code).
-py::tuple orbit_case(const Case& c, int periods, int settle, double tol, int max_iter,
-                     int samples) {
+py::tuple orbit_case(const Case& c, int periods, int settle, double tol, int max_iter, int samples,
+                     double period) {
   CaseOrbitOptions o;
+  o.period = period;
   o.periods = periods;
   o.settle = settle;
   o.orbit.tol = tol;
@@ -580,6 +582,7 @@ PYBIND11_MODULE(_core, m) {
   m.def("orbit", &orbit_case, py::arg("case"), py::arg("periods") = 1, py::arg("settle") = 0,
         py::arg("tol") = OrbitOptions{}.tol, py::arg("max_iter") = OrbitOptions{}.max_iterations,
         py::arg("samples") = OrbitOptions{}.samples,
+        py::arg("period") = std::numeric_limits<double>::quiet_NaN(),
         "(orbit_json, columns, events, summary_json, monodromy, exit_code) of `rubdyn orbit`");
 
   m.def(

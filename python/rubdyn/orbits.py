@@ -70,11 +70,12 @@ def _count(value, name, least):
 
 
 def orbit(case, periods=1, settle=0, tol=1e-8, max_iter=20, samples=200, rtol=None, atol=None,
-          overrides=None):
+          overrides=None, period=None):
     """The case's forced orbit, as `rubdyn orbit CASE` finds it (the same C++ search and the same
     orbit.json), returned as an Orbit; nothing is written.
 
-    case: a Case or a path. periods: k, the period is 2 pi k / omega0. settle: periods of a
+    case: a Case or a path. periods: k, the period is 2 pi k / omega0. period: a free spin's
+    orbit (loads.spin = "torque", autonomous): the guess of its period [s]. settle: periods of a
     transient run before Newton. tol: Newton's tolerance (scaled by the gap and gap x omega0).
     rtol, atol: the runs' tolerances (overrides of solver.rtol, solver.atol). A case without a
     prescribed constant spin raises rubdyn.CaseError, as the CLI exits 2; a search that does not
@@ -91,8 +92,11 @@ def orbit(case, periods=1, settle=0, tol=1e-8, max_iter=20, samples=200, rtol=No
     tol = _finite(tol, "orbit: tol")
     if not tol > 0:
         raise ValueError(f"orbit: tol = {tol}: must be > 0")
+    if period is not None:
+        period = _finite(period, "orbit: period")
     text, columns, events, summary_json, monodromy, code = _core.orbit(
         case, _count(periods, "periods", 1), _count(settle, "settle", 0), tol,
-        _count(max_iter, "max_iter", 1), _count(samples, "samples", 1))
+        _count(max_iter, "max_iter", 1), _count(samples, "samples", 1),
+        float("nan") if period is None else period)
     run = Result.from_core(columns, events, summary_json, case=case)
     return Orbit(json.loads(text), run, np.asarray(monodromy), code)

@@ -36,19 +36,28 @@ double case_omega(const CaseSpec& spec) {
 
 }  // namespace
 
-std::vector<CaseIssue> forced_orbit_issues(const CaseSpec& spec, const CaseOrbitOptions& o) {
+std::vector<CaseIssue> orbit_issues(const CaseSpec& spec, const CaseOrbitOptions& o) {
   std::vector<CaseIssue> bad;
   const std::string& f = spec.source;
   if (spec.solver.kind != "event")
     bad.push_back({f, 0, "solver.kind", spec.solver.kind,
                    "rubdyn orbit runs the return map with the event-driven solver: \"event\""});
   const LoadParams& L = spec.loads();
+  const std::string cl = "command line";
   if (L.spin != SpinDrive::Prescribed) {
-    bad.push_back({f, 0, "loads.spin", std::string(to_string(L.spin)),
-                   "a forced orbit needs a prescribed constant spin (loads.spin = \"prescribed\", "
-                   "loads.spin_accel = 0), whose period 2 pi k / omega0 makes the model periodic; "
-                   "orbits of a free spin (the period an unknown) are not implemented yet"});
+    if (!(o.period > 0.0) || !std::isfinite(o.period))
+      bad.push_back({cl, 0, "--period", std::isnan(o.period) ? "" : fmt::format("{}", o.period),
+                     "a free spin's orbit (loads.spin = \"torque\") is autonomous: its period is "
+                     "an unknown, give a guess > 0 [s] (or prescribe the spin, loads.spin = "
+                     "\"prescribed\", for a forced orbit)"});
+    if (L.unbalance != 0.0)
+      bad.push_back({f, 0, "loads.unbalance", fmt::format("{}", L.unbalance),
+                     "must be 0 for a free spin's orbit: the spin angle must be cyclic (with an "
+                     "unbalance the orbit would have to close in it too; not implemented)"});
   } else {
+    if (!std::isnan(o.period))
+      bad.push_back({cl, 0, "--period", fmt::format("{}", o.period),
+                     "only for a free spin: a prescribed spin's period is 2 pi k / omega0"});
     if (L.spin_accel != 0.0)
       bad.push_back({f, 0, "loads.spin_accel", fmt::format("{}", L.spin_accel),
                      "must be 0: a forced orbit needs a constant spin speed"});
@@ -56,7 +65,6 @@ std::vector<CaseIssue> forced_orbit_issues(const CaseSpec& spec, const CaseOrbit
       bad.push_back(
           {f, 0, "initial.omega0", "0", "must not be 0: the orbit's period is 2 pi k / omega0"});
   }
-  const std::string cl = "command line";
   if (o.periods < 1)
     bad.push_back({cl, 0, "--periods", std::to_string(o.periods), "must be an integer >= 1"});
   if (o.settle < 0)
@@ -73,14 +81,16 @@ std::vector<CaseIssue> forced_orbit_issues(const CaseSpec& spec, const CaseOrbit
 }
 
 CaseOrbit find_case_orbit(const CaseSpec& spec, const CaseOrbitOptions& o) {
-  if (auto bad = forced_orbit_issues(spec, o); !bad.empty()) throw CaseError(std::move(bad));
+  if (auto bad = orbit_issues(spec, o); !bad.empty()) throw CaseError(std::move(bad));
   CaseOrbit out;
   out.model = build_model(spec);
   out.periods = o.periods;
   out.tol = o.orbit.tol;
+  out.autonomous = spec.loads().spin != SpinDrive::Prescribed;
   const MechanicalState s0 = initial_state(spec);
   out.omega = std::abs(out.model->spin(s0.t, s0.q, s0.v));
-  const double T = 2.0 * std::numbers::pi * o.periods / out.omega;
+  const double T =
+      out.autonomous ? o.period * o.periods : 2.0 * std::numbers::pi * o.periods / out.omega;
   EventDrivenOptions opt = event_driven_options(spec);
   opt.stop = o.stop;
   Vec x(2 * out.model->num_dofs());
@@ -105,7 +115,11 @@ CaseOrbit find_case_orbit(const CaseSpec& spec, const CaseOrbitOptions& o) {
     t0 = r.samples.back().t;
   }
   const PeriodMap map(*out.model, t0, opt);
-  out.result = find_forced_orbit(map, x, T, out.omega, o.orbit);
+  if (out.autonomous)  // the state's velocities scaled by the orbit's frequency
+    out.result = find_autonomous_orbit(map, x, T, 2.0 * std::numbers::pi / T,
+                                       {out.model->spin_coordinate()}, o.orbit);
+  else
+    out.result = find_forced_orbit(map, x, T, out.omega, o.orbit);
   return out;
 }
 
@@ -130,9 +144,10 @@ std::string orbit_json(const CaseSpec& spec, const CaseOrbit& o) {
   if (r.outcome == OrbitOutcome::RunFailed)
     fmt::format_to(out, "  \"run_termination\": {},\n", str(to_string(r.run_termination)));
   fmt::format_to(out,
-                 "  \"kind\": \"forced\",\n  \"omega\": {},\n  \"periods\": {},\n  \"t0\": {},\n"
+                 "  \"kind\": {},\n  \"omega\": {},\n  \"periods\": {},\n  \"t0\": {},\n"
                  "  \"period\": {},\n",
-                 num(o.omega), o.periods, num(r.t0), num(r.period));
+                 str(o.autonomous ? "autonomous" : "forced"), num(o.omega), o.periods, num(r.t0),
+                 num(r.period));
   fmt::format_to(out,
                  "  \"section\": {{\"phases\": {}, \"constraints\": {}, \"coordinates\": {}, "
                  "\"chart\": {}}},\n",
@@ -190,6 +205,9 @@ std::string orbit_json(const CaseSpec& spec, const CaseOrbit& o) {
   }
   fmt::format_to(out, "\n  ],\n  \"stability\": {},\n  \"stability_reason\": {},\n",
                  str(to_string(r.floquet.stability)), str(r.floquet.reason));
+  if (o.autonomous)
+    fmt::format_to(out, "  \"trivial_multiplier\": {{\"index\": {}, \"is_one\": {}}},\n",
+                   r.floquet.trivial, r.floquet.trivial_ok ? "true" : "false");
   s += "  \"events_per_period\": {";
   for (int k = 0; k < kNumEventKinds; ++k)
     fmt::format_to(out, "{}{}: {}", k ? ", " : "", str(to_string(static_cast<EventKind>(k))),
@@ -265,7 +283,10 @@ void write_orbit_files(const HeldFolder& folder, const CaseSpec& spec, const Cas
 }
 
 std::vector<CaseIssue> branch_issues(const CaseSpec& spec, const CaseBranchOptions& o) {
-  std::vector<CaseIssue> bad = forced_orbit_issues(spec, o.orbit);
+  std::vector<CaseIssue> bad = orbit_issues(spec, o.orbit);
+  if (spec.loads().spin != SpinDrive::Prescribed)
+    bad.push_back({spec.source, 0, "loads.spin", std::string(to_string(spec.loads().spin)),
+                   "rubdyn branch follows forced orbits (a prescribed constant spin) only"});
   const std::string cl = "command line";
   bool numeric = false;
   for (const auto& e : case_values(spec))
@@ -303,7 +324,7 @@ CaseBranch find_case_branch(const std::string& text, const std::string& source,
     std::vector<std::string> sets = overrides;
     sets.push_back(fmt::format("{}={}", key, lambda));
     const CaseSpec s = parse_case(text, source, sets);
-    if (auto bad = forced_orbit_issues(s, CaseOrbitOptions{}); !bad.empty())
+    if (auto bad = orbit_issues(s, CaseOrbitOptions{}); !bad.empty())
       throw CaseError(std::move(bad));
     ParameterModel pm;
     pm.model = build_model(s);

@@ -30,6 +30,7 @@ struct OrbitArgs {
   int periods = 1, settle = 0, max_iter = OrbitOptions{}.max_iterations,
       samples = OrbitOptions{}.samples;
   double tol = OrbitOptions{}.tol;
+  std::optional<double> period;
 };
 
 std::string phase_words(const std::vector<Phase>& p) {
@@ -112,8 +113,9 @@ int orbit_command(const OrbitArgs& a) {
   opt.orbit.tol = a.tol;
   opt.orbit.max_iterations = a.max_iter;
   opt.orbit.samples = a.samples;
+  if (a.period) opt.period = *a.period;
   if (bad.empty()) {
-    const auto more = forced_orbit_issues(spec, opt);
+    const auto more = orbit_issues(spec, opt);
     bad.insert(bad.end(), more.begin(), more.end());
   }
   if (!bad.empty()) throw CaseError(bad);  // exit 2, nothing written
@@ -143,8 +145,9 @@ void add_orbit_command(CLI::App& app, Action& action) {
   auto a = std::make_shared<OrbitArgs>();
   auto* sub = app.add_subcommand(
       "orbit",
-      "A periodic orbit of a case at a prescribed constant spin by Newton on the event-driven "
-      "flow's return map, with its Floquet multipliers and stability (docs/orbits.md)");
+      "A periodic orbit of a case (a prescribed constant spin, or a free spin with --period) by "
+      "Newton on the event-driven flow's return map, with its Floquet multipliers and stability "
+      "(docs/orbits.md)");
   add_case_options(*sub, a->c);
   sub->add_option("--out", a->out, "output folder (default: the case's output folder + -orbit)");
   sub->add_option("--from", a->from,
@@ -153,6 +156,8 @@ void add_orbit_command(CLI::App& app, Action& action) {
   sub->add_option("--at", a->at, "with --from: start from the sample at this time [s]");
   sub->add_option("--periods", a->periods,
                   "k: the orbit's period is 2 pi k / omega0 (k > 1: a subharmonic)");
+  sub->add_option("--period", a->period,
+                  "a free spin's orbit (loads.spin = \"torque\"): the guess of its period [s]");
   sub->add_option("--settle", a->settle,
                   "periods of a transient run before Newton starts (from the initial state)");
   sub->add_option("--tol", a->tol,

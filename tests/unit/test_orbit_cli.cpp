@@ -97,18 +97,26 @@ TEST_CASE("rubdyn orbit: the saddle, from --set, is unstable with one multiplier
 
 TEST_CASE("rubdyn orbit: bad input is exit 2 with nothing written", "[orbit][cli]") {
   const fs::path dir = fresh_dir("orbit-bad");
-  // cases/jeffcott.toml spins under a torque: no forced orbit
+  // cases/jeffcott.toml spins under a torque with an unbalance: no forced orbit, and a free
+  // spin's (autonomous) orbit needs --period and no unbalance
   const CliOutcome r = cli("orbit " + sh(std::string(RUBDYN_SOURCE_DIR) + "/cases/jeffcott.toml") +
                            " --out " + sh(dir.string()) + " --periods 0");
   CHECK(r.code == 2);
   CHECK(has(r.err, "loads.spin"));
   CHECK(has(r.err, "prescribed"));
   CHECK(has(r.err, "--periods"));
+  CHECK(has(r.err, "its period is an unknown"));
+  CHECK(has(r.err, "loads.unbalance"));
   CHECK_FALSE(fs::exists(dir));
   const CliOutcome a =
       cli("orbit " + sh(kCase) + " --out " + sh(dir.string()) + " --set loads.spin_accel=10");
   CHECK(a.code == 2);
   CHECK(has(a.err, "loads.spin_accel"));
+  CHECK_FALSE(fs::exists(dir));
+  // a prescribed spin's period is known: --period is refused
+  const CliOutcome p = cli("orbit " + sh(kCase) + " --out " + sh(dir.string()) + " --period 0.004");
+  CHECK(p.code == 2);
+  CHECK(has(p.err, "--period"));
   CHECK_FALSE(fs::exists(dir));
 }
 

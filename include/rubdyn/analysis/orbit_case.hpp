@@ -21,27 +21,33 @@ struct CaseOrbitOptions {
   /// Periods of a transient run from the case's initial state before Newton starts (the
   /// section then lies settle periods later).
   int settle = 0;
+  /// A free spin's orbit (loads.spin = "torque"): the guess of its period [s] (required there,
+  /// refused with a prescribed spin, whose period is 2 pi k / omega0).
+  double period = std::numeric_limits<double>::quiet_NaN();
   OrbitOptions orbit;
   const std::atomic<bool>* stop = nullptr;  ///< raised: the running run ends (interrupted)
 };
 
-/// Every reason the case and options cannot give a forced orbit (empty: they can): the event
-/// solver; a prescribed spin (loads.spin = "prescribed") at a constant speed (loads.spin_accel
-/// = 0) that is not zero (initial.omega0); periods >= 1, settle >= 0, tol > 0, max_iterations
-/// >= 1, samples >= 1. Each issue names the case file (or the command-line option) and key.
-std::vector<CaseIssue> forced_orbit_issues(const CaseSpec& spec, const CaseOrbitOptions& o);
+/// Every reason the case and options cannot give an orbit (empty: they can): the event solver;
+/// either a prescribed spin (loads.spin = "prescribed") at a constant speed (loads.spin_accel
+/// = 0) that is not zero (initial.omega0), no --period: a forced orbit; or a free spin without
+/// an unbalance (loads.unbalance = 0: the spin angle is then cyclic) and a --period guess > 0:
+/// an autonomous orbit; periods >= 1, settle >= 0, tol > 0, max_iterations >= 1, samples >= 1.
+/// Each issue names the case file (or the command-line option) and key.
+std::vector<CaseIssue> orbit_issues(const CaseSpec& spec, const CaseOrbitOptions& o);
 
 /// A case's orbit: its model (what the result's states are states of) and the search's result.
 struct CaseOrbit {
   std::unique_ptr<LagrangianModel> model;
-  double omega = 0.0;  ///< the prescribed spin speed [rad/s]
+  bool autonomous = false;  ///< a free spin's orbit, its period found
+  double omega = 0.0;       ///< the prescribed spin speed, or the free spin's at the start [rad/s]
   int periods = 1;
   double tol = 0.0;  ///< Newton's tolerance
   OrbitResult result;
 };
 
-/// Searches the case's forced orbit from its initial state. Throws CaseError (every issue of
-/// forced_orbit_issues) on bad input; numerical trouble is the result's outcome.
+/// Searches the case's orbit (forced or autonomous) from its initial state. Throws CaseError (every
+/// issue of orbit_issues) on bad input; numerical trouble is the result's outcome.
 CaseOrbit find_case_orbit(const CaseSpec& spec, const CaseOrbitOptions& o);
 
 /// orbit.json's text: the outcome and message, the period, the section (phases, coordinates),
@@ -78,7 +84,7 @@ struct CaseBranchOptions {
   CaseOrbitOptions orbit;
 };
 
-/// Every reason the case and options cannot give a branch (forced_orbit_issues, the key a
+/// Every reason the case and options cannot give a branch (orbit_issues, a forced orbit, the key a
 /// number of the case, points >= 2, ds > 0, ...).
 std::vector<CaseIssue> branch_issues(const CaseSpec& spec, const CaseBranchOptions& o);
 
