@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <fstream>
 #include <future>
+#include <limits>
 #include <optional>
 #include <string>
 #include <utility>
@@ -23,6 +24,7 @@
 
 #include "rubdyn/analysis/campbell.hpp"
 #include "rubdyn/analysis/compare.hpp"
+#include "rubdyn/analysis/orbit_case.hpp"
 #include "rubdyn/analysis/postprocess.hpp"
 #include "rubdyn/core/run_types.hpp"
 #include "rubdyn/driver/simulate.hpp"
@@ -202,6 +204,53 @@ py::tuple run_case(const Case& c, const py::object& progress, double progress_in
   return py::make_tuple(series_dict(series_table(*model, sink.samples)),
                         event_columns_of(sink.events, model->contact_count()),
                         summary_json(summary));
+}
+
+/// rubdyn.orbit: the case's forced orbit (analysis/orbit_case.hpp), searched on a worker thread
+/// as run_case runs (Ctrl-C raises the stop flag; the search ends at its running run). Returns
+/// (orbit.json's text, the sampled period's columns, its events, its summary.json, the
+/// monodromy matrix, the CLI's exit code).
+py::tuple orbit_case(const Case& c, int periods, int settle, double tol, int max_iter, int samples,
+                     double period) {
+  CaseOrbitOptions o;
+  o.period = period;
+  o.periods = periods;
+  o.settle = settle;
+  o.orbit.tol = tol;
+  o.orbit.max_iterations = max_iter;
+  o.orbit.samples = samples;
+  std::atomic<bool> stop{false};
+  o.stop = &stop;
+  CaseOrbit r;
+  std::exception_ptr error;
+  bool interrupted = false;
+  {
+    py::gil_scoped_release release;
+    auto done = std::async(std::launch::async, [&] {
+      try {
+        r = find_case_orbit(c.spec, o);
+      } catch (...) {
+        error = std::current_exception();
+      }
+    });
+    while (done.wait_for(std::chrono::milliseconds(50)) != std::future_status::ready) {
+      py::gil_scoped_acquire acquire;
+      if (PyErr_CheckSignals() != 0) {
+        PyErr_Clear();
+        interrupted = true;
+        stop = true;
+      }
+    }
+  }
+  if (error) std::rethrow_exception(error);
+  if (interrupted) {
+    PyErr_SetNone(PyExc_KeyboardInterrupt);
+    throw py::error_already_set();
+  }
+  const FlowRun& run = r.result.orbit;
+  return py::make_tuple(orbit_json(c.spec, r), series_dict(series_table(*r.model, run.samples)),
+                        event_columns_of(run.events, r.model->contact_count()),
+                        summary_json(run.summary), Mat(r.result.monodromy.M), exit_code(r.result));
 }
 
 /// A numpy array (any real dtype, any stride) as a vector of doubles; `what` names it in errors.
@@ -523,6 +572,12 @@ PYBIND11_MODULE(_core, m) {
   m.def("run", &run_case, py::arg("case"), py::arg("progress") = py::none(),
         py::arg("progress_interval") = 0.1,
         "(columns, events, summary_json) of one run; the GIL is released while it runs");
+
+  m.def("orbit", &orbit_case, py::arg("case"), py::arg("periods") = 1, py::arg("settle") = 0,
+        py::arg("tol") = OrbitOptions{}.tol, py::arg("max_iter") = OrbitOptions{}.max_iterations,
+        py::arg("samples") = OrbitOptions{}.samples,
+        py::arg("period") = std::numeric_limits<double>::quiet_NaN(),
+        "(orbit_json, columns, events, summary_json, monodromy, exit_code) of `rubdyn orbit`");
 
   m.def(
       "campbell",

@@ -16,5 +16,7 @@ void add_run_command(CLI::App& app, Action& action);
 void add_compare_command(CLI::App& app, Action& action);
 void add_analyze_command(CLI::App& app, Action& action);
 void add_sweep_commands(CLI::App& app, Action& action);
+void add_orbit_command(CLI::App& app, Action& action);
+void add_branch_command(CLI::App& app, Action& action);
 
 }  // namespace rubdyn::app

@@ -30,6 +30,8 @@ int main(int argc, char** argv) {
   rubdyn::app::add_compare_command(app, action);
   rubdyn::app::add_analyze_command(app, action);
   rubdyn::app::add_sweep_commands(app, action);
+  rubdyn::app::add_orbit_command(app, action);
+  rubdyn::app::add_branch_command(app, action);
   // The first word that is no option names the subcommand: an unknown one is an error naming
   // it, whatever follows (CLI11 would answer `rubdyn orbit --help` with the general help and
   // exit 0, as if the command existed).

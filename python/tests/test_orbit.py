@@ -1,0 +1,60 @@
+"""rubdyn.orbit: the same search and the same orbit.json as `rubdyn orbit` (docs/orbits.md),
+the sampled period as a Result, bad input as rubdyn.CaseError."""
+import csv
+import json
+import os
+
+import numpy as np
+import pytest
+
+import rubdyn
+from conftest import SOURCE, run_cli
+
+FULL_RUB = os.path.join(SOURCE, "cases", "full-rub.toml")
+JEFFCOTT = os.path.join(SOURCE, "cases", "jeffcott.toml")
+
+
+def test_orbit_is_the_cli_orbit(cli, tmp_path):
+    out = tmp_path / "o"
+    p = run_cli(cli, "orbit", FULL_RUB, "--out", str(out))
+    assert p.returncode == 0, p.stderr
+    with open(out / "orbit.json") as f:
+        from_cli = json.load(f)
+    orb = rubdyn.orbit(FULL_RUB)
+    assert orb.exit_code == 0 and orb.converged and orb.stability == "stable"
+    # the same deterministic search: every key equal but the wall clock
+    a, b = dict(orb), from_cli
+    a.pop("wall_seconds")
+    b.pop("wall_seconds")
+    assert a == b
+    # numpy views
+    assert orb.multipliers.shape == (6,) and np.all(np.abs(orb.multipliers) < 1)
+    assert np.all(np.abs(orb.multipliers) + orb.errors < 1)
+    assert orb.monodromy.shape == (6, 6)
+    # the multipliers are the matrix's eigenvalues (LAPACK here, Eigen there: to round-off)
+    assert np.allclose(np.sort_complex(np.linalg.eigvals(orb.monodromy)),
+                       np.sort_complex(orb.multipliers), rtol=0, atol=1e-12)
+    # the sampled period: orbit.csv's rows, bit for bit
+    with open(out / "orbit.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == len(orb.run)
+    for name in ("t", "x_r", "vy_s", "F_N"):
+        assert np.array_equal(np.array([float(r[name]) for r in rows]), orb.run[name])
+    assert orb.state["x_r"] == orb.run["x_r"][0]
+
+
+def test_orbit_refuses_a_case_without_a_prescribed_spin():
+    with pytest.raises(rubdyn.CaseError) as e:
+        rubdyn.orbit(JEFFCOTT)
+    assert "loads.spin" in str(e.value)
+    with pytest.raises(ValueError):
+        rubdyn.orbit(FULL_RUB, periods=0)
+    with pytest.raises(TypeError):
+        rubdyn.orbit(FULL_RUB, max_iter=1.5)
+
+
+def test_orbit_that_does_not_converge_says_so():
+    orb = rubdyn.orbit(FULL_RUB, tol=1e-15, max_iter=2)
+    assert orb["outcome"] == "no_convergence" and orb.exit_code == 3
+    assert orb.stability == "undecided"
+    assert len(orb["newton"]) == 3 and len(orb.run) > 100

@@ -1,0 +1,419 @@
+#include "rubdyn/analysis/continuation.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/QR>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+namespace rubdyn {
+
+namespace {
+
+// The parameter step of G_lambda's central differences, in units of s_lambda: the same as the
+// state's first finite-difference step (1e-3 of its scale), where the differences of the
+// return map are truncation- or noise-limited at about 1e-3 .. 1e-5 (docs/orbits.md, 4).
+constexpr double kLambdaStep = 1e-3;
+// A special point is located by successive parabolic interpolation of lambda (fold) or of the
+// crossing multiplier (the others) in the arclength between the two points that bracket it,
+// stopping when the arclength moves by less than this fraction of the bracket, or after
+// kLocateIterations corrector solves.
+constexpr double kLocateRel = 1e-4;
+constexpr int kLocateIterations = 8;
+// A multiplier is real when its imaginary part is below this (eigenvalues of a real matrix
+// come in exact conjugate pairs, and Eigen returns real ones with a zero imaginary part).
+constexpr double kRealImag = 0.0;
+
+/// The orbit at one point: its chart, monodromy, G_lambda, tangent and books.
+struct PointData {
+  BranchPoint p;
+  std::unique_ptr<SectionChart> chart;
+  Mat J;  // d x (d + 1): [Phi - I, G_lambda s_lambda]
+  Vec t;  // unit tangent (d + 1), in this chart's coordinates
+};
+
+struct Eval {
+  bool ok = false;
+  std::string why;
+  FlowRun run;
+  Vec G;  // coords(P(x)) - coords(x)
+};
+
+Eval evaluate(const ModelFamily& family, const SectionChart& chart, VecIn xi, double lambda,
+              long& runs) {
+  Eval e;
+  ParameterModel pm;
+  try {
+    pm = family(lambda);
+  } catch (const std::exception& ex) {
+    e.why = fmt::format("the model at {:.10g}: {}", lambda, ex.what());
+    return e;
+  }
+  Vec x;
+  if (!chart.embed_on(*pm.model, xi, x)) {
+    e.why =
+        fmt::format("the state could not be put on the section's constraints at {:.10g}", lambda);
+    return e;
+  }
+  const PeriodMap map(*pm.model, pm.t0, pm.options);
+  e.run = map.run(x, pm.period);
+  ++runs;
+  if (!e.run.complete()) {
+    e.why = fmt::format("a run at {:.10g} ended early ({}): {}", lambda,
+                        to_string(e.run.summary.termination), e.run.summary.message);
+    return e;
+  }
+  e.G = chart.coords(stacked_state(e.run.samples.back())) -
+        chart.coords(stacked_state(e.run.samples.front()));
+  e.ok = true;
+  return e;
+}
+
+/// Everything about the orbit through x at lambda (x on its section's constraints).
+bool make_point(const ModelFamily& family, double lambda, VecIn x, const ContinuationOptions& opt,
+                PointData& out, std::string& why, long& runs, const std::string* expect = nullptr) {
+  ParameterModel pm = family(lambda);
+  const PeriodMap map(*pm.model, pm.t0, pm.options);
+  const FlowRun run = map.run(x, pm.period);
+  ++runs;
+  if (!run.complete()) {
+    why =
+        fmt::format("the run on the point at {:.10g} ended early: {}", lambda, run.summary.message);
+    return false;
+  }
+  const Vec xs = stacked_state(run.samples.front());
+  if (expect && event_signature(run, pm.t0) != *expect) {
+    // the orbit's events changed (a grazing, a lift-off at the section): no chart of the
+    // previous phases, no smooth continuation; the point is reported as it is
+    out.p.lambda = lambda;
+    out.p.period = pm.period;
+    out.p.x0 = xs;
+    out.p.signature = event_signature(run, pm.t0);
+    out.p.floquet.reason = "not computed: the orbit's events changed";
+    out.chart.reset();
+    return true;
+  }
+  const Vec D = state_scale(*pm.model, pm.omega);
+  out.chart = std::make_unique<SectionChart>(*pm.model, pm.t0, xs, start_phases(run), D);
+  const SectionChart& chart = *out.chart;
+  const int d = chart.dim();
+  const Vec zero = Vec::Zero(d);
+  const FiniteDifferenceMonodromy fd(opt.orbit.fd_steps);
+  const long runs_before = map.runs();
+  Monodromy m = fd.compute(map, pm.period, chart, zero, run);
+  const Mat tangent = chart.tangent(zero);
+  FloquetAnalysis fl = floquet_analysis(m, tangent, D);
+  for (int k = 0; k < opt.orbit.fd_refinements && fl.stability == Stability::Undecided &&
+                  fd.refine(map, pm.period, chart, zero, run, m);
+       ++k)
+    fl = floquet_analysis(m, tangent, D);
+  runs += map.runs() - runs_before;
+  if (!m.ok) {
+    why = "the monodromy at " + fmt::format("{:.10g}", lambda) + ": " + m.failure;
+    return false;
+  }
+  // G_lambda by central differences at the same state
+  const double h = kLambdaStep * opt.lambda_scale;
+  const Eval ep = evaluate(family, chart, zero, lambda + h, runs);
+  const Eval em = evaluate(family, chart, zero, lambda - h, runs);
+  if (!ep.ok || !em.ok) {
+    why = "G_lambda: " + (ep.ok ? em.why : ep.why);
+    return false;
+  }
+  out.J.resize(d, d + 1);
+  out.J.leftCols(d) = m.M - Mat::Identity(d, d);
+  out.J.col(d) = (ep.G - em.G) / (2.0 * h) * opt.lambda_scale;
+  const Eigen::JacobiSVD<Mat> svd(out.J, Eigen::ComputeFullV);
+  out.t = svd.matrixV().col(d);
+  // the sampled period: amplitude and forces
+  BranchPoint& p = out.p;
+  p.lambda = lambda;
+  p.period = pm.period;
+  p.x0 = xs;
+  p.residual = chart.scaled_distance(xs, stacked_state(run.samples.back()));
+  p.monodromy = std::move(m);
+  p.floquet = std::move(fl);
+  p.signature = event_signature(run, pm.t0);
+  const int samples = std::max(8, opt.orbit.samples);
+  const FlowRun sampled = map.run(xs, pm.period, pm.period / samples);
+  ++runs;
+  p.F_N_min = std::numeric_limits<double>::infinity();
+  p.F_N_max = 0.0;
+  for (const Sample& s : sampled.samples) {
+    PlaneMotion pl;
+    if (pm.model->plane_motion(0, s.t, s.q, s.v, pl))
+      p.amplitude = std::max(p.amplitude, pl.rotor.norm());
+    p.F_N_max = std::max(p.F_N_max, s.contacts[0].F_N);
+    p.F_N_min = std::min(p.F_N_min, s.contacts[0].F_N);
+  }
+  return true;
+}
+
+/// The real multiplier nearest to `target` (+1 or -1), or NaN.
+double nearest_real(const FloquetAnalysis& f, double target) {
+  double best = std::numeric_limits<double>::quiet_NaN();
+  for (const auto& m : f.multipliers) {
+    if (std::abs(m.value.imag()) > kRealImag) continue;
+    if (std::isnan(best) || std::abs(m.value.real() - target) < std::abs(best - target))
+      best = m.value.real();
+  }
+  return best;
+}
+
+int complex_outside(const FloquetAnalysis& f) {
+  int n = 0;
+  for (const auto& m : f.multipliers)
+    if (std::abs(m.value.imag()) > kRealImag && std::abs(m.value) > 1.0) ++n;
+  return n;
+}
+
+/// The corrector from point `from` at arclength s along its tangent: u with G(u) = 0 and
+/// t . (u - u_from) = s. Returns false when it does not converge.
+struct Corrected {
+  Vec u;
+  Eval eval;
+  int iterations = 0;
+};
+bool correct(const ModelFamily& family, const PointData& from, double s,
+             const ContinuationOptions& opt, Corrected& out, std::string& why, long& runs) {
+  const SectionChart& chart = *from.chart;
+  const int d = chart.dim();
+  Vec u0 = Vec::Zero(d + 1);
+  u0(d) = from.p.lambda / opt.lambda_scale;
+  const Vec up = u0 + s * from.t;
+  Mat A(d + 1, d + 1);
+  A.topRows(d) = from.J;
+  A.row(d) = from.t.transpose();
+  Vec u = up;
+  // Newton with point i's Jacobian (and the arclength row), improved by Broyden's updates
+  Vec F_prev, step_prev;
+  for (int it = 0; it < opt.max_corrector; ++it) {
+    Eval e = evaluate(family, chart, u.head(d), u(d) * opt.lambda_scale, runs);
+    if (!e.ok) {
+      why = e.why;
+      return false;
+    }
+    Vec F(d + 1);
+    F.head(d) = e.G;
+    F(d) = from.t.dot(u - up);
+    if (F_prev.size())
+      A += ((F - F_prev) - A * step_prev) * step_prev.transpose() / step_prev.squaredNorm();
+    const double res = e.G.size() ? e.G.cwiseAbs().maxCoeff() : 0.0;
+    if (res <= opt.orbit.tol) {
+      out.u = u;
+      out.eval = std::move(e);
+      out.iterations = it;
+      return true;
+    }
+    const Vec step = A.colPivHouseholderQr().solve(-F);
+    if (!all_finite(step)) {
+      why = "the corrector's system is singular";
+      return false;
+    }
+    u += step;
+    F_prev = F;
+    step_prev = step;
+  }
+  why = fmt::format("the corrector did not converge in {} iterations at ds = {:.3g}",
+                    opt.max_corrector, s);
+  return false;
+}
+
+}  // namespace
+
+Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_guess,
+                             const ContinuationOptions& opt) {
+  const auto clock0 = std::chrono::steady_clock::now();
+  Branch b;
+  long runs = 0;
+  auto done = [&](std::string outcome, std::string msg) {
+    b.outcome = std::move(outcome);
+    b.message = std::move(msg);
+    b.runs = runs;
+    b.wall_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - clock0).count();
+    return b;
+  };
+  // the first point: Newton at lambda0
+  ParameterModel pm0;
+  try {
+    pm0 = family(lambda0);
+  } catch (const std::exception& e) {
+    return done("start_failed", e.what());
+  }
+  const PeriodMap map0(*pm0.model, pm0.t0, pm0.options);
+  OrbitOptions o0 = opt.orbit;
+  o0.samples = 0;
+  const OrbitResult first = find_forced_orbit(map0, x_guess, pm0.period, pm0.omega, o0);
+  runs += first.runs;
+  if (!first.converged())
+    return done("start_failed", "the orbit at the first value: " + first.message);
+  std::vector<PointData> pts;
+  {
+    PointData p0;
+    std::string why;
+    if (!make_point(family, lambda0, first.x0, opt, p0, why, runs))
+      return done("start_failed", why);
+    const int d = p0.chart->dim();
+    if (p0.t(d) * opt.direction < 0) p0.t = -p0.t;
+    p0.p.tangent_lambda = p0.t(d);
+    p0.p.runs = runs;
+    b.points.push_back(p0.p);
+    pts.push_back(std::move(p0));
+  }
+  double ds = opt.ds;
+  while (static_cast<int>(b.points.size()) < opt.max_points) {
+    const PointData& cur = pts.back();
+    const long runs_before = runs;
+    Corrected c;
+    std::string why;
+    if (!correct(family, cur, ds, opt, c, why, runs)) {
+      ds *= 0.5;
+      if (ds < opt.ds_min)
+        return done("step_failed",
+                    fmt::format("no step below ds_min = {:.3g} from lambda = {:.10g}: {}",
+                                opt.ds_min, cur.p.lambda, why));
+      continue;
+    }
+    const int d = cur.chart->dim();
+    const double lambda = c.u(d) * opt.lambda_scale;
+    if (lambda < opt.lambda_min || lambda > opt.lambda_max)
+      return done("lambda_bound", fmt::format("the next point, at {:.10g}, is outside [{:.10g}, "
+                                              "{:.10g}]",
+                                              lambda, opt.lambda_min, opt.lambda_max));
+    PointData next;
+    if (!make_point(family, lambda, stacked_state(c.eval.run.samples.front()), opt, next, why, runs,
+                    &cur.p.signature))
+      return done("step_failed", why);
+    if (!next.chart) {  // the events changed: the branch of smooth orbits ends here
+      BranchSpecial s;
+      s.kind = "events_change";
+      s.after = static_cast<int>(b.points.size()) - 1;
+      s.lambda = lambda;
+      s.how = "the orbit's events are [" + next.p.signature + "] instead of [" + cur.p.signature +
+              "]: a grazing or lift-off between the two points, where the branch of smooth "
+              "orbits ends";
+      next.p.arclength = cur.p.arclength + std::abs(ds);
+      next.p.runs = runs - runs_before;
+      b.points.push_back(next.p);
+      b.specials.push_back(s);
+      return done("events_change", s.how);
+    }
+    // orientation: along the secant from the current point, in the new chart's coordinates
+    const int dn = next.chart->dim();
+    Vec sec(dn + 1);
+    sec.head(dn) = -next.chart->coords(cur.p.x0);
+    sec(dn) = (lambda - cur.p.lambda) / opt.lambda_scale;
+    if (next.t.dot(sec) < 0) next.t = -next.t;
+    BranchPoint& p = next.p;
+    p.arclength = cur.p.arclength + (c.u -
+                                     [&] {
+                                       Vec u0 = Vec::Zero(d + 1);
+                                       u0(d) = cur.p.lambda / opt.lambda_scale;
+                                       return u0;
+                                     }())
+                                        .norm();
+    p.corrector_iterations = c.iterations;
+    p.tangent_lambda = next.t(dn);
+    p.runs = runs - runs_before;
+    const int i = static_cast<int>(b.points.size()) - 1;  // the special lies after point i
+    b.points.push_back(p);
+    // special points between cur and next
+    const BranchPoint& a = cur.p;
+    if (a.tangent_lambda * p.tangent_lambda < 0) {
+      BranchSpecial f;
+      f.kind = "fold";
+      f.after = i;
+      // the extremum of lambda over the arclength by successive parabolic interpolation of
+      // corrector solves from point i (the bracket [0, ds])
+      std::vector<std::pair<double, double>> pts_s = {{0.0, a.lambda}, {ds, lambda}};
+      Corrected mid;
+      std::string w;
+      int evals = 0;
+      if (correct(family, cur, 0.5 * ds, opt, mid, w, runs)) {
+        pts_s.push_back({0.5 * ds, mid.u(d) * opt.lambda_scale});
+        ++evals;
+        for (int k = 0; k < kLocateIterations; ++k) {
+          std::sort(pts_s.begin(), pts_s.end());
+          // the three around the extreme lambda
+          std::size_t m = 0;
+          for (std::size_t j = 1; j < pts_s.size(); ++j)
+            if ((a.tangent_lambda > 0 ? pts_s[j].second > pts_s[m].second
+                                      : pts_s[j].second < pts_s[m].second))
+              m = j;
+          const std::size_t j0 = m == 0 ? 0 : (m + 1 == pts_s.size() ? m - 2 : m - 1);
+          const auto [s0, l0] = pts_s[j0];
+          const auto [s1, l1] = pts_s[j0 + 1];
+          const auto [s2, l2] = pts_s[j0 + 2];
+          const double num = (s1 - s0) * (s1 - s0) * (l1 - l2) - (s1 - s2) * (s1 - s2) * (l1 - l0);
+          const double den = (s1 - s0) * (l1 - l2) - (s1 - s2) * (l1 - l0);
+          if (den == 0.0) break;
+          const double sv = s1 - 0.5 * num / den;
+          if (!(sv > 0.0 && sv < ds)) break;
+          bool close = false;
+          for (const auto& q : pts_s) close |= std::abs(q.first - sv) <= kLocateRel * ds;
+          if (close) break;
+          Corrected cv;
+          if (!correct(family, cur, sv, opt, cv, w, runs)) break;
+          pts_s.push_back({sv, cv.u(d) * opt.lambda_scale});
+          ++evals;
+        }
+      }
+      double best = pts_s[0].second;
+      for (const auto& q : pts_s)
+        best = a.tangent_lambda > 0 ? std::max(best, q.second) : std::min(best, q.second);
+      f.lambda = best;
+      const double m0 = nearest_real(a.floquet, 1.0), m1 = nearest_real(p.floquet, 1.0);
+      f.how = fmt::format(
+          "d lambda / ds changes sign; lambda's extremum over the arclength from {} corrector "
+          "solves (successive parabolic interpolation); the real multiplier nearest +1 goes from "
+          "{:.6g} to {:.6g}",
+          evals + 2, m0, m1);
+      b.specials.push_back(f);
+    }
+    const double n0 = nearest_real(a.floquet, -1.0), n1 = nearest_real(p.floquet, -1.0);
+    if (!std::isnan(n0) && !std::isnan(n1) && (n0 + 1.0) * (n1 + 1.0) < 0) {
+      BranchSpecial s;
+      s.kind = "period_doubling";
+      s.after = i;
+      const double w = (n0 + 1.0) / (n0 - n1);  // linear in the arclength
+      s.lambda = a.lambda + w * (p.lambda - a.lambda);
+      s.how = fmt::format("a real multiplier crosses -1 ({:.6g} -> {:.6g}); linear interpolation",
+                          n0, n1);
+      b.specials.push_back(s);
+    }
+    if (complex_outside(a.floquet) != complex_outside(p.floquet)) {
+      BranchSpecial s;
+      s.kind = "neimark_sacker";
+      s.after = i;
+      s.lambda = 0.5 * (a.lambda + p.lambda);
+      s.how = "a complex pair crosses the unit circle; the midpoint of the two points";
+      b.specials.push_back(s);
+    }
+    if (p.signature != a.signature) {
+      BranchSpecial s;
+      s.kind = "events_change";
+      s.after = i;
+      s.lambda = p.lambda;
+      s.how = "the orbit's events are [" + p.signature + "] instead of [" + a.signature +
+              "]: a grazing or lift-off between the two points, where the branch of smooth "
+              "orbits ends";
+      b.specials.push_back(s);
+      pts.push_back(std::move(next));
+      return done("events_change", s.how);
+    }
+    pts.push_back(std::move(next));
+    if (pts.size() > 3) pts.erase(pts.begin());  // only the last points are needed
+    // step control
+    if (c.iterations <= 4)
+      ds = std::min(1.3 * ds, opt.ds_max);
+    else if (c.iterations >= 7)
+      ds = std::max(0.7 * ds, opt.ds_min);
+  }
+  return done("max_points", fmt::format("{} points", b.points.size()));
+}
+
+}  // namespace rubdyn

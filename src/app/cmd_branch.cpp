@@ -1,0 +1,138 @@
+// rubdyn branch CASE --vary KEY: a branch of forced periodic orbits followed in a case key by
+// pseudo-arclength continuation, with folds, period doublings and Neimark-Sacker points located
+// (analysis/continuation.hpp, docs/orbits.md section 10), written to an output folder.
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "cli_common.hpp"
+#include "commands.hpp"
+#include "restart.hpp"
+#include "rubdyn/analysis/orbit_case.hpp"
+#include "rubdyn/io/case_error.hpp"
+#include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/output_folder.hpp"
+#include "rubdyn/io/text_files.hpp"
+
+namespace rubdyn::app {
+
+namespace {
+
+struct BranchArgs {
+  CaseArgs c;
+  std::string key;
+  std::optional<std::string> out, from, at, rtol, atol;
+  std::optional<double> to;
+  bool down = false;
+  CaseBranchOptions o;
+};
+
+int branch_command(BranchArgs& a) {
+  std::vector<std::string> sets;
+  if (a.from) {
+    std::optional<CaseSpec> plain;
+    try {
+      plain = load_case(a.c.path, a.c.sets);
+    } catch (const CaseError&) {
+      // reported by the load below, with the restart's keys
+    }
+    sets = restart_overrides(*a.from, a.at, plain ? &*plain : nullptr, "rubdyn branch");
+    const std::string key = "run.t_start=";
+    if (!sets.empty() && sets.front().starts_with(key)) {
+      const CaseSpec own = plain ? *plain : load_case(a.c.path, a.c.sets);
+      const double t = std::stod(sets.front().substr(key.size()));
+      sets.push_back(fmt::format("run.t_end={}", t + (own.run.t_end - own.run.t_start)));
+    }
+  }
+  sets.insert(sets.end(), a.c.sets.begin(), a.c.sets.end());
+  if (a.rtol) sets.push_back("solver.rtol=" + *a.rtol);
+  if (a.atol) sets.push_back("solver.atol=" + *a.atol);
+  std::vector<CaseIssue> bad;
+  if (a.out && a.out->empty())
+    bad.push_back({"command line", 0, "--out", "", "an empty path is no output folder"});
+  CaseSpec spec;
+  try {
+    spec = load_case(a.c.path, sets);
+  } catch (const CaseError& e) {
+    bad.insert(bad.end(), e.issues().begin(), e.issues().end());
+  }
+  a.o.key = a.key;
+  a.o.to = a.to.value_or(std::numeric_limits<double>::quiet_NaN());
+  a.o.direction = a.down ? -1 : +1;
+  if (bad.empty()) {
+    const auto more = branch_issues(spec, a.o);
+    bad.insert(bad.end(), more.begin(), more.end());
+  }
+  if (!bad.empty()) throw CaseError(bad);  // exit 2, nothing written
+  const std::string text = read_input_file(a.c.path, kMaxCaseBytes, "case");
+
+  const std::string dir = a.out ? *a.out : output_folder(spec) + "-branch";
+  stop_on_signals();
+  a.o.orbit.stop = &stop_flag();
+  const auto folder = open_orbit_folder(dir, spec, {"branch.csv", "branch.json"});
+  const CaseBranch b = find_case_branch(text, a.c.path, sets, a.o);
+  write_branch_files(*folder, b);
+  const Branch& r = b.branch;
+  std::printf("branch        %s from %.10g: %zu points, %s (%s)\n", b.key.c_str(), b.lambda0,
+              r.points.size(), r.outcome.c_str(), r.message.c_str());
+  if (!r.points.empty()) {
+    double lo = r.points.front().lambda, hi = lo;
+    for (const auto& p : r.points) lo = std::min(lo, p.lambda), hi = std::max(hi, p.lambda);
+    std::printf("range         %s in [%.10g, %.10g]\n", b.key.c_str(), lo, hi);
+  }
+  for (const auto& s : r.specials)
+    std::printf("%-13s %s = %.12g between points %d and %d: %s\n", s.kind.c_str(), b.key.c_str(),
+                s.lambda, s.after, s.after + 1, s.how.c_str());
+  std::printf("cost          %ld runs of the return map in %.2f s\n", r.runs, r.wall_seconds);
+  std::printf("output        %s/\n", dir.c_str());
+  const int code = exit_code(b);
+  if (code != 0)
+    std::fprintf(stderr, "rubdyn branch: %s: %s\n", r.outcome.c_str(), r.message.c_str());
+  return code;
+}
+
+}  // namespace
+
+void add_branch_command(CLI::App& app, Action& action) {
+  auto a = std::make_shared<BranchArgs>();
+  auto* sub = app.add_subcommand(
+      "branch",
+      "Follow a case's forced periodic orbit in a case key (pseudo-arclength continuation), "
+      "locating folds, period doublings and Neimark-Sacker points (docs/orbits.md)");
+  add_case_options(*sub, a->c);
+  sub->add_option("--vary", a->key, "the case key to follow the orbit in, e.g. initial.omega0")
+      ->required();
+  sub->add_option("--to", a->to, "stop beyond this value of the key");
+  sub->add_flag("--down", a->down, "the first step decreases the key (default: increases)");
+  sub->add_option("--points", a->o.points, "points on the branch, the first included");
+  sub->add_option("--ds", a->o.ds, "first arclength step (scaled units)");
+  sub->add_option("--ds-max", a->o.ds_max, "largest arclength step");
+  sub->add_option("--scale", a->o.scale,
+                  "the key's unit in the arclength (default: 1 % of its value in the case)");
+  sub->add_option("--periods", a->o.orbit.periods, "k: the orbits' period is 2 pi k / omega0");
+  sub->add_option("--tol", a->o.orbit.orbit.tol, "Newton's and the corrector's tolerance");
+  sub->add_option("--out", a->out, "output folder (default: the case's output folder + -branch)");
+  sub->add_option("--from", a->from, "start from the last complete sample of this output folder");
+  sub->add_option("--at", a->at, "with --from: start from the sample at this time [s]");
+  sub->add_option("--rtol", a->rtol, "the runs' relative tolerance (overrides solver.rtol)");
+  sub->add_option("--atol", a->atol, "the runs' absolute tolerance (overrides solver.atol)");
+  sub->footer(
+      "Writes branch.csv (one row per point: the key's value, the orbit's amplitude and normal "
+      "forces, period, multipliers with error bounds, stability, the state, the events), "
+      "branch.json (outcome, special points) and case.resolved.toml; plots: "
+      "validation/orbits/plot.py DIR. Exit 0: the branch ended as asked (its points, --to, or "
+      "where the orbit's events change); 3: a step failed; 2: bad input.");
+  sub->callback([a, &action] {
+    if (a->at && !a->from) throw CLI::ValidationError("--at", "needs --from");
+    action = [a] { return branch_command(*a); };
+  });
+}
+
+}  // namespace rubdyn::app

@@ -1,0 +1,184 @@
+// rubdyn orbit: the output folder, the exit codes and the failures (src/app/cmd_orbit.cpp,
+// analysis/orbit_case.hpp) on cases/full-rub.toml (the sprung ring's forward full annular rub).
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "support/cli.hpp"
+
+using namespace rubdyn::testing;
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kCase = std::string(RUBDYN_SOURCE_DIR) + "/cases/full-rub.toml";
+
+/// The number after "key": in a JSON text (the first occurrence), NaN when absent.
+double json_number(const std::string& text, const std::string& key) {
+  const std::string k = "\"" + key + "\": ";
+  const auto p = text.find(k);
+  if (p == std::string::npos) return std::nan("");
+  return std::strtod(text.c_str() + p + k.size(), nullptr);
+}
+
+std::vector<std::vector<std::string>> csv(const std::string& text) {
+  std::vector<std::vector<std::string>> rows;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) {
+    std::vector<std::string> row;
+    std::istringstream l(line);
+    std::string f;
+    while (std::getline(l, f, ',')) row.push_back(f);
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+}  // namespace
+
+TEST_CASE("rubdyn orbit: the stable full rub orbit, its folder and its periodicity",
+          "[orbit][cli]") {
+  const fs::path dir = fresh_dir("orbit-ok");
+  const CliOutcome r = cli("orbit " + sh(kCase) + " --out " + sh(dir.string()));
+  INFO(r.out << r.err);
+  REQUIRE(r.code == 0);
+  CHECK(has(r.out, "stable: every |multiplier| + its error < 1"));
+  const std::string js = slurp(dir / "orbit.json");
+  CHECK(has(js, "\"outcome\": \"converged\""));
+  CHECK(has(js, "\"stability\": \"stable\""));
+  CHECK(has(js, "\"phases\": [\"slip-\"]"));
+  CHECK(json_number(js, "period") == Approx(2 * M_PI / 1500).epsilon(1e-15));
+  CHECK(json_number(js, "residual") <= 1e-8);
+  CHECK(has(js, "\"impact\": 0, \"contact\": 0, \"liftoff\": 0"));  // none per period
+  CHECK(fs::is_regular_file(dir / "case.resolved.toml"));
+  // orbit.csv: one period, 200 samples after the first; its last row is its first to Newton's
+  // tolerance (1e-8 of g0 = 2e-4 m and of g0 Omega = 0.3 m/s: the residual of the run that wrote
+  // it, which takes the same steps as Newton's last run)
+  const auto rows = csv(slurp(dir / "orbit.csv"));
+  REQUIRE(rows.size() == 202);  // header + 201 grid samples (no event inside the period)
+  CHECK(rows[0][0] == "t");
+  CHECK(rows[0][1] == "x_r");
+  const auto& first = rows[1];
+  const auto& last = rows.back();
+  CHECK(std::stod(last[0]) == Approx(2 * M_PI / 1500).epsilon(1e-15));
+  for (int c = 1; c <= 8; ++c) {  // x_r, y_r, x_s, y_s (m), then their rates (m/s)
+    const double scale = c <= 4 ? 2e-4 : 2e-4 * 1500;
+    INFO(rows[0][static_cast<std::size_t>(c)]);
+    CHECK(std::abs(std::stod(last[static_cast<std::size_t>(c)]) -
+                   std::stod(first[static_cast<std::size_t>(c)])) <= 1e-8 * scale);
+  }
+  CHECK(last.back() == "slip-");
+  fs::remove_all(dir);
+}
+
+TEST_CASE("rubdyn orbit: the saddle, from --set, is unstable with one multiplier outside",
+          "[orbit][cli]") {
+  const fs::path dir = fresh_dir("orbit-saddle");
+  // the smaller root of closed-forms.md 5.3 (the sprung ring), from cases/full-rub.toml's header
+  const std::string sets =
+      " --set initial.x_r=-0.00021227786696844736 --set initial.y_r=-0.00011101946416261583"
+      " --set initial.vx_r=0.16652919624392373 --set initial.vy_r=-0.31841680045267107"
+      " --set initial.x_s=-3.41268532344108e-05 --set initial.y_s=-2.012272986739972e-05"
+      " --set initial.vx_s=0.03018409480109958 --set initial.vy_s=-0.051190279851616206";
+  const CliOutcome r = cli("orbit " + sh(kCase) + sets + " --out " + sh(dir.string()));
+  INFO(r.out << r.err);
+  REQUIRE(r.code == 0);
+  const std::string js = slurp(dir / "orbit.json");
+  CHECK(has(js, "\"stability\": \"unstable\""));
+  // the first multiplier (largest |.|) is the unstable one: exp(283.128 T) = 3.27384
+  CHECK(json_number(js, "abs") == Approx(3.27384).epsilon(1e-3));
+  fs::remove_all(dir);
+}
+
+TEST_CASE("rubdyn orbit: bad input is exit 2 with nothing written", "[orbit][cli]") {
+  const fs::path dir = fresh_dir("orbit-bad");
+  // cases/jeffcott.toml spins under a torque with an unbalance: no forced orbit, and a free
+  // spin's (autonomous) orbit needs --period and no unbalance
+  const CliOutcome r = cli("orbit " + sh(std::string(RUBDYN_SOURCE_DIR) + "/cases/jeffcott.toml") +
+                           " --out " + sh(dir.string()) + " --periods 0");
+  CHECK(r.code == 2);
+  CHECK(has(r.err, "loads.spin"));
+  CHECK(has(r.err, "prescribed"));
+  CHECK(has(r.err, "--periods"));
+  CHECK(has(r.err, "its period is an unknown"));
+  CHECK(has(r.err, "loads.unbalance"));
+  CHECK_FALSE(fs::exists(dir));
+  const CliOutcome a =
+      cli("orbit " + sh(kCase) + " --out " + sh(dir.string()) + " --set loads.spin_accel=10");
+  CHECK(a.code == 2);
+  CHECK(has(a.err, "loads.spin_accel"));
+  CHECK_FALSE(fs::exists(dir));
+  // a prescribed spin's period is known: --period is refused
+  const CliOutcome p = cli("orbit " + sh(kCase) + " --out " + sh(dir.string()) + " --period 0.004");
+  CHECK(p.code == 2);
+  CHECK(has(p.err, "--period"));
+  CHECK_FALSE(fs::exists(dir));
+}
+
+TEST_CASE("rubdyn orbit: no convergence is exit 3 with the history and the last iterate",
+          "[orbit][cli]") {
+  const fs::path dir = fresh_dir("orbit-noconv");
+  // below the computed map's noise floor (measured 1e-13 .. 1e-11 on this case at rtol 1e-10):
+  // Newton cannot reach it in two iterations
+  const CliOutcome r =
+      cli("orbit " + sh(kCase) + " --out " + sh(dir.string()) + " --tol 1e-15 --max-iter 2");
+  INFO(r.out << r.err);
+  CHECK(r.code == 3);
+  CHECK(has(r.err, "no_convergence"));
+  const std::string js = slurp(dir / "orbit.json");
+  CHECK(has(js, "\"outcome\": \"no_convergence\""));
+  CHECK(has(js, "\"stability\": \"undecided\""));
+  CHECK(has(js, "\"iteration\": 2"));  // the guess and two iterates
+  CHECK(has(js, "\"state\": {\"x_r\": "));
+  CHECK(fs::file_size(dir / "orbit.csv") > 1000);  // the last iterate's period
+  fs::remove_all(dir);
+}
+
+TEST_CASE("rubdyn orbit --from: the section at the end of a transient run", "[orbit][cli]") {
+  const fs::path run = fresh_dir("orbit-from-run"), dir = fresh_dir("orbit-from");
+  // from the closed form's state moved 1 % of g0 inwards in x_r (off the constraint: a free start,
+  // an impact, then sliding), 20 ms of transient
+  const CliOutcome a = cli("run " + sh(kCase) + " --set initial.x_r=0.000412 --t-end 0.02 --out " +
+                           sh(run.string()));
+  REQUIRE(a.code == 0);
+  const CliOutcome r =
+      cli("orbit " + sh(kCase) + " --from " + sh(run.string()) + " --out " + sh(dir.string()));
+  INFO(r.out << r.err);
+  REQUIRE(r.code == 0);
+  const std::string js = slurp(dir / "orbit.json");
+  CHECK(json_number(js, "t0") == Approx(0.02).epsilon(1e-14));
+  CHECK(has(js, "\"stability\": \"stable\""));
+  fs::remove_all(run);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("rubdyn branch: a few points of the full rub's branch, and bad input", "[orbit][cli]") {
+  const fs::path dir = fresh_dir("branch");
+  const CliOutcome r =
+      cli("branch " + sh(kCase) + " --vary initial.omega0 --points 4 --out " + sh(dir.string()));
+  INFO(r.out << r.err);
+  REQUIRE(r.code == 0);
+  const std::string js = slurp(dir / "branch.json");
+  CHECK(has(js, "\"outcome\": \"max_points\""));
+  CHECK(has(js, "\"points\": 4"));
+  const auto rows = csv(slurp(dir / "branch.csv"));
+  REQUIRE(rows.size() == 5);
+  CHECK(rows[0][1] == "initial.omega0");
+  CHECK(std::stod(rows[1][1]) == 1500.0);
+  for (std::size_t i = 2; i < rows.size(); ++i) {  // increasing speed, all stable
+    CHECK(std::stod(rows[i][1]) > std::stod(rows[i - 1][1]));
+    CHECK(rows[i][8] == "stable");
+  }
+  fs::remove_all(dir);
+  const CliOutcome b =
+      cli("branch " + sh(kCase) + " --vary rotor.nonsense --points 1 --out " + sh(dir.string()));
+  CHECK(b.code == 2);
+  CHECK(has(b.err, "--vary"));
+  CHECK(has(b.err, "--points"));
+  CHECK_FALSE(fs::exists(dir));
+}
