@@ -1,5 +1,5 @@
-// The event-driven integrator with K contacts (src/hybrid/event_multi.cpp), on problems whose
-// answer is known without it: two uncoupled models side by side (each part's events at its own
+// The event-driven integrator with K contacts (src/hybrid/event_driven.cpp: one engine for
+// every K), on problems whose answer is known without it: two uncoupled models side by side (each part's events at its own
 // exact times, or at its own one-contact run's), two identical copies (simultaneous impacts,
 // identical halves), a rod dropped flat (both ends at the exact instant, the weight shared
 // equally, a joint Zeno truncation), a rod sliding flat (exact deceleration and stick time), a rod

@@ -184,7 +184,7 @@ def test_mj_proj_converges_to_the_two_plane_rolling_orbit(tmp_path):
 
 @pytest.mark.skipif(not os.path.isfile(RUBDYN), reason="no rubdyn CLI (set RUBDYN_CLI)")
 def test_event_solver_reproduces_the_two_plane_rolling_orbit(tmp_path):
-    """The event-driven solver with two contacts (src/hybrid/event_multi.cpp), started on the
+    """The event-driven solver with two contacts (src/hybrid/event_driven.cpp), started on the
     closed-form orbit of the two-plane rotor rolling at both planes (the case of the test above):
     both planes stick at every sample, and each plane's F_N and F_T are (8.3) to the integrator's
     tolerance. Measured over 5 ms: the largest relative F_N error and |F_T error| / F_N over both
