@@ -1,12 +1,12 @@
 // The event-driven integrator with K contacts (src/hybrid/event_driven.cpp: one engine for
-// every K), on problems whose answer is known without it: two uncoupled models side by side (each part's events at its own
-// exact times, or at its own one-contact run's), two identical copies (simultaneous impacts,
-// identical halves), a rod dropped flat (both ends at the exact instant, the weight shared
-// equally, a joint Zeno truncation), a rod sliding flat (exact deceleration and stick time), a rod
-// dropped tilted (one end lands first: stick at one contact while the other is open, then both),
-// the two-plane rotor (energy balance, invariants, self-convergence), and its contact phases in
-// the K-contact chart (ring_chart.hpp) against the projection formulation, sliding and rolling,
-// on sprung and on fixed rings.
+// every K), on problems whose answer is known without it: two uncoupled models side by side (each
+// part's events at its own exact times, or at its own one-contact run's), two identical copies
+// (simultaneous impacts, identical halves), a rod dropped flat (both ends at the exact instant, the
+// weight shared equally, a joint Zeno truncation), a rod sliding flat (exact deceleration and stick
+// time), a rod dropped tilted (one end lands first: stick at one contact while the other is open,
+// then both), the two-plane rotor (energy balance, invariants, self-convergence), and its contact
+// phases in the K-contact chart (ring_chart.hpp) against the projection formulation, sliding and
+// rolling, on sprung and on fixed rings.
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
