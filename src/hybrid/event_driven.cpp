@@ -473,7 +473,7 @@ class Engine {
   ContactDecider decide_;
   EventGuard guard_;
   const MechanicalState* given_ = nullptr;  // the initial state, while its contacts are decided
-  std::unique_ptr<PhaseChart> chart_;  // null: contact phases as the DAE with projection
+  std::unique_ptr<PhaseChart> chart_;       // null: contact phases as the DAE with projection
   std::unique_ptr<PhaseSession> free_, projected_;
   std::vector<std::unique_ptr<PhaseSession>> reduced_;  // by coordinates removed
   PhaseSession* cur_ = nullptr;

@@ -1800,7 +1800,7 @@ class Loader {
   std::string source_;
   MatrixSnapshot* snapshot_ = nullptr;  // kind "matrices": files as first read (case_io.hpp)
   int name_line_ = 0;                   // the line of the top-level `name`
-  std::string_view text_;  // the case file's text (numbers as written)
+  std::string_view text_;               // the case file's text (numbers as written)
   std::vector<CaseIssue> issues_;
   std::set<std::string> overridden_;
   std::map<std::string, std::string> set_text_;  // an override's value as given

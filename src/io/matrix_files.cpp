@@ -171,9 +171,10 @@ Mat parse_npy(const std::string& bytes) {
   for (std::size_t i = 0; i < h.size(); ++i) {
     const unsigned char c = static_cast<unsigned char>(h[i]);
     if ((c < 0x20 && c != '\n' && c != '\t') || c >= 0x7f)
-      fail(fmt::format("the .npy header holds the byte \\x{:02X} at offset {}: not ASCII text, "
-                       "not a NumPy .npy header",
-                       static_cast<unsigned>(c), start + i));
+      fail(
+          fmt::format("the .npy header holds the byte \\x{:02X} at offset {}: not ASCII text, "
+                      "not a NumPy .npy header",
+                      static_cast<unsigned>(c), start + i));
   }
   const std::string descr = header_value(h, "descr");
   if (descr != "'<f8'" && descr != "\"<f8\"")

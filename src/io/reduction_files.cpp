@@ -49,7 +49,8 @@ void write_reduction_files(int dir_fd, const std::string& dir, const CaseSpec& s
   put("reduced_T.npy", npy_bytes(red->T));
   put("reduced_modes.npy", npy_bytes(red->modes));
   std::string j = "{\n";
-  j += fmt::format("  \"method\": {},\n", quoted_string(std::string(to_string(red->params.method))));
+  j +=
+      fmt::format("  \"method\": {},\n", quoted_string(std::string(to_string(red->params.method))));
   j += fmt::format("  \"modes\": {},\n",
                    red->params.modes > 0 ? std::to_string(red->params.modes) : "null");
   j += fmt::format("  \"cutoff_hz\": {},\n",

@@ -117,8 +117,8 @@ TEST_CASE("Issue 34 CLI: check, run and sweep <(cat case.toml) read the pipe", "
   // (bash: /bin/sh may have no process substitution)
   const fs::path out = fresh_dir("psub-out"), dir = fresh_dir("psub-dir");
   auto bash = [&](const std::string& args) {
-    const std::string cmd = "bash -c " + sh(std::string(RUBDYN_CLI) + " " + args + " > " +
-                                            sh(out.string()) + " 2>&1");
+    const std::string cmd =
+        "bash -c " + sh(std::string(RUBDYN_CLI) + " " + args + " > " + sh(out.string()) + " 2>&1");
     const int st = std::system(cmd.c_str());
     return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
   };
