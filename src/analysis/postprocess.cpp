@@ -118,6 +118,10 @@ struct Uniform {
   std::vector<std::complex<double>> vz;  ///< dz/dt: a state, exact at the samples (no aliasing)
   std::vector<double> omega;
 };
+/// The uniform grid of the spectrum is never longer than this (1e8 points: 4 GB in its three
+/// arrays); the output rows are at most kMaxOutputRows (1e8) too.
+constexpr double kMaxResampled = 1e8;
+
 Uniform resample(const RunRecord& r, double t0, double t1, int plane) {
   const std::unique_ptr<LagrangianModel> model = build_model(r.spec);
   check_plane(*model, plane);
@@ -125,15 +129,23 @@ Uniform resample(const RunRecord& r, double t0, double t1, int plane) {
   std::map<long long, long> count;  // spacing histogram in units of 1e-12 s
   for (size_t i = 0; i + 1 < s.size(); ++i) {
     const double h = s[i + 1].t - s[i].t;
-    if (h > 0) ++count[std::llround(h * 1e12)];
+    // (a spacing below the histogram's unit cannot be a grid's: a run that ended within
+    // 1e-12 s of its start, say, has no uniform grid to resample)
+    if (h > 0 && std::llround(h * 1e12) >= 1) ++count[std::llround(h * 1e12)];
   }
-  if (count.empty()) throw std::invalid_argument(r.dir + ": fewer than two sample times");
+  if (count.empty())
+    throw std::invalid_argument(r.dir + ": no two sample times 1e-12 s apart or more");
   const auto mode = std::max_element(count.begin(), count.end(),
                                      [](auto& a, auto& b) { return a.second < b.second; });
   Uniform u;
   u.t0 = t0;
   u.dt = static_cast<double>(mode->first) * 1e-12;
-  const long n = static_cast<long>(std::floor((t1 - t0) / u.dt * (1 + 1e-12))) + 1;
+  const double span = std::floor((t1 - t0) / u.dt * (1 + 1e-12)) + 1;
+  if (!(span <= kMaxResampled))
+    throw std::invalid_argument(fmt::format(
+        "{}: {:.3g} points of spacing {:.3g} s in [{}, {}] s, above the {:.0e} resampled at most",
+        r.dir, span, u.dt, t0, t1, kMaxResampled));
+  const long n = static_cast<long>(span);
   u.z.resize(n);
   u.vz.resize(n);
   u.omega.resize(n);

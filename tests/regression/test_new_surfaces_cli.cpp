@@ -201,3 +201,19 @@ TEST_CASE("Issue 34 CLI: run --from a folder that ends in contact starts on its 
     fs::remove_all(b);
   }
 }
+
+// Fix: src/analysis/postprocess.cpp (a spacing below the resampling grid's 1e-12 s unit is no
+// grid); before: `rubdyn analyze` of a run that ended 7.8e-17 s after its start (rotor.L = 1e30:
+// step_collapse) died with "vector::_M_default_append" (a grid step of 0), exit 2, and a sweep
+// point of it was "error: analysis".
+TEST_CASE("Issue 34 CLI: analyze of a run that ended within 1e-12 s of its start",
+          "[issue34][cli]") {
+  const fs::path d = fresh_dir("analyze-collapsed");
+  CliOutcome o = cli("run " + sh(kRef) + " --set rotor.L=1e30 --quiet --out " + sh(d.string()));
+  REQUIRE(o.code == 3);  // step_collapse, two samples 7.8e-17 s apart
+  o = cli("analyze " + sh(d.string()));
+  CHECK(o.code == 0);
+  CHECK(has(slurp((d / "analysis" / "analysis.json").string()),
+            "no two sample times 1e-12 s apart or more"));
+  fs::remove_all(d);
+}
