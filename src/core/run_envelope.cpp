@@ -173,7 +173,8 @@ void RunEnvelope::check_plausible() {
   const double flow = std::max({std::abs(sum_.energy_initial), std::abs(sum_.energy_final),
                                 std::abs(sum_.work_torque), std::abs(sum_.work_damping),
                                 std::abs(sum_.work_friction), std::abs(sum_.work_impacts)});
-  if (std::abs(sum_.energy_residual) > plaus_.energy_residual_rel * flow) {
+  if (std::abs(sum_.energy_residual) >
+      std::max(plaus_.energy_residual_rel * flow, plaus_.energy_residual_abs)) {
     fail(Termination::Implausible,
          fmt::format("the energy balance does not close: residual {:.3g} J against a largest "
                      "flow of {:.3g} J (bound: {} of it); likely a degenerate parameter (a "

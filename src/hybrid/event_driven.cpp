@@ -516,6 +516,11 @@ RunSummary Engine::run(const MechanicalState& init, double t_end) {
   double pen = 0.0;
   for (int k = 0; k < K_; ++k) pen = std::max(pen, 1e-6 * m_.gap_scale(k) + tol(k).graze_tol);
   plaus.max_penetration = pen;
+  // The works are integrated with an absolute tolerance kWorkAtol each (three quadratures, a
+  // new start at every phase): a residual of a few kWorkAtol is their resolution, whatever the
+  // flows. Ten of it is the floor below which the balance is not judged (a run whose flows are
+  // 4e-11 J, a block pulsed on a belt, ended "implausible" with a residual of 4e-11 J).
+  plaus.energy_residual_abs = 10.0 * kWorkAtol;
   env_->set_plausibility(plaus);
   auto steps_so_far = [&sum] {
     return std::accumulate(sum.phase_steps.begin(), sum.phase_steps.end(), 0L);

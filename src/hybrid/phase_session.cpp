@@ -91,7 +91,7 @@ PhaseSession::PhaseSession(const PhaseContext& ctx, const SessionSettings& s, Se
   // rates rtol |p'| + atol_v; works rtol |W| + 1e-9 J.
   const int N = 2 * dim_ + kNw;
   rtol_.assign(static_cast<std::size_t>(N), s.rtol);
-  atol_.assign(static_cast<std::size_t>(N), 1e-9);
+  atol_.assign(static_cast<std::size_t>(N), kWorkAtol);
   for (int i = 0; i < dim_; ++i) {
     atol_[static_cast<std::size_t>(i)] = s.atol_q;
     atol_[static_cast<std::size_t>(dim_ + i)] = s.atol_v;

@@ -29,6 +29,8 @@
 namespace rubdyn::detail {
 
 inline constexpr int kNw = 3;  // works: applied loads, dampers, friction
+/// The works' absolute tolerance in a session's error weights [J] (rtol |W| + this).
+inline constexpr double kWorkAtol = 1e-9;
 using Works = std::array<double, kNw>;
 
 /// Tolerances and limits shared by the sessions.

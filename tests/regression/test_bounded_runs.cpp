@@ -308,6 +308,20 @@ TEST_CASE("Plausibility: the envelope's rules on a summary", "[bounded]") {
     const RunSummary s = env.finish(1.0, 1.0, {0.0, 10.0, 0.0, 0.0});
     CHECK(s.termination == Termination::Implausible);
   }
+  SECTION("a residual within the solver's resolution of its books is not judged") {
+    // flows of 4e-11 J whose books leave 4e-11 J: the whole largest flow, but below the 1e-8 J
+    // the event solver's works resolve (ten times their absolute tolerance)
+    for (const double floor : {0.0, 1e-8}) {
+      MemorySink sink;
+      RunEnvelope env(c, sink, 0.0, 1.0, 0.0, 0.1, "test", "{}");
+      Plausibility p;
+      p.energy_residual_abs = floor;
+      env.set_plausibility(p);
+      const RunSummary s = env.finish(1.0, 0.0, {4e-11, 0.0, 0.0, 0.0});
+      INFO("floor " << floor << ": " << s.message);
+      CHECK(s.complete() == (floor > 0.0));
+    }
+  }
   SECTION("step rate: 1000 steps that advance 1e-15 s of a 1 s run") {
     MemorySink sink;
     RunEnvelope env(c, sink, 0.0, 1.0, 1.0, 0.1, "test", "{}");

@@ -85,10 +85,12 @@ inline constexpr double kMaxContactSpeed = 2e4;
 ///   round-off of the gap, fixed-step schemes have none, plain mj allows O(h));
 /// - |energy_residual| <= energy_residual_rel x the largest flow of the balance (|E_initial|,
 ///   |E_final| and each work): a balance that leaves half the largest flow unaccounted for is
-///   not an integration error but a broken model or scheme.
+///   not an integration error but a broken model or scheme; a residual within
+///   energy_residual_abs (the solver's resolution of its books) is never judged.
 struct Plausibility {
   double max_penetration = std::numeric_limits<double>::infinity();  ///< [m]
   double energy_residual_rel = 0.5;
+  double energy_residual_abs = 0.0;  ///< [J]
 };
 
 /// The default wall-time budget [s] of one run of a sweep point whose case sets none
