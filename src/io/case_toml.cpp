@@ -747,6 +747,15 @@ class Loader {
                            "an override is one line: no line end or other control character"});
         continue;
       }
+      // TOML text is UTF-8: a value with another encoding's bytes (a path typed in Latin-1)
+      // could not be written back to case.resolved.toml; as a bare string it kept its quotes
+      // (--out $'dir\xe9' wrote into a folder named "dir\xe9" with the quotes)
+      if (!valid_utf8(ov)) {
+        issues_.push_back({"--set", 0, "(override)", printable_text(ov),
+                           "an override is UTF-8 text (a case is TOML): a byte of another "
+                           "encoding, shown as \\xHH, cannot be written back"});
+        continue;
+      }
       const auto dot = lhs.find('.');
       if (eq == std::string::npos || dot == std::string::npos || dot == 0 ||
           dot + 1 == lhs.size()) {

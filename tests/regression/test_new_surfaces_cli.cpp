@@ -217,3 +217,22 @@ TEST_CASE("Issue 34 CLI: analyze of a run that ended within 1e-12 s of its start
             "no two sample times 1e-12 s apart or more"));
   fs::remove_all(d);
 }
+
+// Fix: src/io/case_toml.cpp (an override must be UTF-8); before: `--out $'dir\xe9'` (a Latin-1
+// path) was taken as a bare string with its quotes and the run wrote into a folder named
+// "dir\xe9" with the quote characters, exit 0.
+TEST_CASE("Issue 34 CLI: an --out or --set that is not UTF-8 is refused, nothing written",
+          "[issue34][cli]") {
+  const fs::path d = fresh_dir("not-utf8");
+  fs::create_directories(d);
+  const std::string latin1 = (d / "dir\xe9").string();
+  CliOutcome o = cli("run " + sh(kRef) + " --t-end 0.001 --quiet --out " + sh(latin1));
+  CHECK(o.code == 2);
+  CHECK(has(o.err, "dir\\xE9"));
+  CHECK(has(o.err, "UTF-8"));
+  CHECK(fs::is_empty(d));  // neither dir\xe9 nor "dir\xe9" with its quotes
+  o = cli("check " + sh(kRef) + " --set 'name=\"n\xe9\"'");
+  CHECK(o.code == 2);
+  CHECK(has(o.err, "UTF-8"));
+  fs::remove_all(d);
+}
