@@ -37,19 +37,7 @@ struct BranchArgs {
 int branch_command(BranchArgs& a) {
   std::vector<std::string> sets;
   if (a.from) {
-    std::optional<CaseSpec> plain;
-    try {
-      plain = load_case(a.c.path, a.c.sets);
-    } catch (const CaseError&) {
-      // reported by the load below, with the restart's keys
-    }
-    sets = restart_overrides(*a.from, a.at, plain ? &*plain : nullptr, "rubdyn branch");
-    const std::string key = "run.t_start=";
-    if (!sets.empty() && sets.front().starts_with(key)) {
-      const CaseSpec own = plain ? *plain : load_case(a.c.path, a.c.sets);
-      const double t = std::stod(sets.front().substr(key.size()));
-      sets.push_back(fmt::format("run.t_end={}", t + (own.run.t_end - own.run.t_start)));
-    }
+    sets = restart_overrides_keeping_length(*a.from, a.at, a.c.path, a.c.sets, "rubdyn branch");
   }
   sets.insert(sets.end(), a.c.sets.begin(), a.c.sets.end());
   if (a.rtol) sets.push_back("solver.rtol=" + *a.rtol);

@@ -85,21 +85,7 @@ void print_report(const CaseOrbit& o, const std::string& dir) {
 int orbit_command(const OrbitArgs& a) {
   std::vector<std::string> sets;
   if (a.from) {
-    std::optional<CaseSpec> plain;
-    try {
-      plain = load_case(a.c.path, a.c.sets);
-    } catch (const CaseError&) {
-      // reported by the load below, with the restart's keys
-    }
-    sets = restart_overrides(*a.from, a.at, plain ? &*plain : nullptr, "rubdyn orbit");
-    // the orbit does not read run.t_end, but the case must stay valid with the sample's time as
-    // run.t_start: the case's own run length is carried to it
-    const std::string key = "run.t_start=";
-    if (!sets.empty() && sets.front().starts_with(key)) {
-      const CaseSpec own = plain ? *plain : load_case(a.c.path, a.c.sets);
-      const double t = std::stod(sets.front().substr(key.size()));
-      sets.push_back(fmt::format("run.t_end={}", t + (own.run.t_end - own.run.t_start)));
-    }
+    sets = restart_overrides_keeping_length(*a.from, a.at, a.c.path, a.c.sets, "rubdyn orbit");
   }
   sets.insert(sets.end(), a.c.sets.begin(), a.c.sets.end());
   if (a.rtol) sets.push_back("solver.rtol=" + *a.rtol);

@@ -7,9 +7,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <stdexcept>
 
 #include "rubdyn/io/case_error.hpp"
+#include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/columns.hpp"
 #include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/io/output_reader.hpp"
@@ -89,6 +91,26 @@ std::vector<std::string> restart_overrides(const std::string& from,
     if (rate) sets.push_back(fmt::format("initial.{}={}", c.rate_key, sample_value(*s, *rate)));
   }
   return sets;
+}
+
+std::vector<std::string> restart_overrides_keeping_length(const std::string& from,
+                                                          const std::optional<std::string>& at,
+                                                          const std::string& path,
+                                                          const std::vector<std::string>& sets,
+                                                          std::string_view command) {
+  std::optional<CaseSpec> plain;
+  try {
+    plain = load_case(path, sets);
+  } catch (const CaseError&) {
+    // reported by the caller's load, with the restart's keys
+  }
+  std::vector<std::string> out = restart_overrides(from, at, plain ? &*plain : nullptr, command);
+  const std::string key = "run.t_start=";
+  if (plain && !out.empty() && out.front().starts_with(key)) {
+    const double t = std::stod(out.front().substr(key.size()));
+    out.push_back(fmt::format("run.t_end={}", t + (plain->run.t_end - plain->run.t_start)));
+  }
+  return out;
 }
 
 }  // namespace rubdyn::app

@@ -21,4 +21,13 @@ std::vector<std::string> restart_overrides(const std::string& from,
                                            const std::optional<std::string>& at,
                                            const CaseSpec* plain, std::string_view command);
 
+/// The same for commands that do not integrate to run.t_end (orbit, branch): the case at `path`
+/// with `sets` is the plain case, and its own run length is carried to the sample's time
+/// (run.t_end = t_start + its length), so that the case stays valid with the sample's time.
+std::vector<std::string> restart_overrides_keeping_length(const std::string& from,
+                                                          const std::optional<std::string>& at,
+                                                          const std::string& path,
+                                                          const std::vector<std::string>& sets,
+                                                          std::string_view command);
+
 }  // namespace rubdyn::app
