@@ -8,6 +8,7 @@
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "rubdyn/analysis/derived.hpp"
+#include "rubdyn/hybrid/method_choice.hpp"
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/model/matrix_model.hpp"
@@ -117,8 +118,23 @@ int check_matrices(const CaseSpec& c) {
   return 0;
 }
 
-int check_command(const CaseArgs& a) {
-  const CaseSpec c = load_case(a.path, a.sets);  // throws CaseError: exit 2
+/// The event solver's method for this case: as given, or chosen from the model's stiffness at
+/// the initial state (hybrid/method_choice.hpp), as the run will choose it.
+void print_event_method(const CaseSpec& c) {
+  if (c.solver.kind != "event") return;
+  const auto model = build_model(c);
+  const MechanicalState s = initial_state(c);
+  const StiffnessAssessment a = assess_stiffness(*model, s.t, s.q, s.v);
+  fmt::print("event solver's multistep method (solver.method = auto: BDF when stiff)\n");
+  fmt::print("  {}\n", a.reason());
+  const auto said = [&](const std::string& m) {
+    return m == "auto" ? fmt::format("{} (auto)", a.stiff ? "bdf" : "adams") : m + " (as given)";
+  };
+  fmt::print("  free flight: {}; contact phases: {}\n", said(c.solver.method),
+             said(c.solver.contact_method));
+}
+
+int check_model(const CaseSpec& c) {
   if (c.model == "jeffcott") return check_jeffcott(c);
   if (c.model == "matrices") return check_matrices(c);
   const double omega0 = c.initial.v0[TH], omega_lim = c.run.omega_lim;
@@ -184,6 +200,13 @@ int check_command(const CaseArgs& a) {
       break;
   }
   return 0;
+}
+
+int check_command(const CaseArgs& a) {
+  const CaseSpec c = load_case(a.path, a.sets);  // throws CaseError: exit 2
+  const int rc = check_model(c);
+  print_event_method(c);
+  return rc;
 }
 
 }  // namespace

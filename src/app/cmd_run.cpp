@@ -158,7 +158,9 @@ void add_run_command(CLI::App& app, Action& action) {
   auto* sub = app.add_subcommand("run", "Run a case and write its output folder");
   add_case_options(*sub, a->c);
   sub->add_option("--solver", a->solver, solver_names(" | "));
-  sub->add_option("--method", a->method, "event solver, free flight: adams (default) | bdf");
+  sub->add_option(
+      "--method", a->method,
+      "event solver, free flight: auto (default: bdf when the model is stiff) | adams | bdf");
   sub->add_option("--rtol", a->rtol, "event solver: relative tolerance");
   sub->add_option("--atol", a->atol, "event solver: absolute tolerance on positions [m]");
   sub->add_option("--h", a->h, "fixed-step schemes: time step [s]");

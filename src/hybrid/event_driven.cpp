@@ -27,6 +27,7 @@
 #include "event_locator.hpp"
 #include "phase_session.hpp"
 #include "rubdyn/core/run_envelope.hpp"
+#include "rubdyn/hybrid/method_choice.hpp"
 
 namespace rubdyn {
 
@@ -61,6 +62,26 @@ class Engine {
   RunSummary run(const MechanicalState& init, double t_end);
 
  private:
+  /// The multistep families of the free flight and the reduced contact phases: as the options
+  /// give them, or (auto) chosen by the model's stiffness at the initial state
+  /// (method_choice.hpp). Returns the summary's words for them.
+  std::string choose_methods(const MechanicalState& init) {
+    std::optional<StiffnessAssessment> a;
+    if (opt_.method == MultistepMethod::Auto || opt_.contact_method == MultistepMethod::Auto)
+      a = assess_stiffness(m_, init.t, init.q, init.v);
+    const auto adams = [&](MultistepMethod m) {
+      return m == MultistepMethod::Adams || (m == MultistepMethod::Auto && !a->stiff);
+    };
+    adams_ = adams(opt_.method);
+    contact_adams_ = adams(opt_.contact_method);
+    const auto how = [](MultistepMethod m) {
+      return m == MultistepMethod::Auto ? "auto" : "given";
+    };
+    return fmt::format("\"methods\": \"free flight {}, contact phases {}\", ", how(opt_.method),
+                       how(opt_.contact_method)) +
+           (a ? fmt::format("\"stiffness\": \"{}\", ", a->reason()) : std::string());
+  }
+
   const SwitchTolerances& tol(int k) const { return ctx_.tl(k); }
   const ContactLaw& law(int k) const { return ctx_.law(k); }
   Phase mode(int k) const { return ctx_.modes[k]; }
@@ -72,7 +93,7 @@ class Engine {
     s.atol_q = opt_.atol;
     s.atol_v = tol(0).atol_v;
     s.g0 = tol(0).g0;
-    s.adams = opt_.adams;
+    s.adams = adams_;
     s.fixed_point = opt_.fixed_point;
     // A CVODE call takes at most kCheckSteps steps (run_envelope.hpp): the loop then sees the
     // stop flag, the clock and the step rate between steps, not only at samples and events. A
@@ -86,7 +107,7 @@ class Engine {
     if (opt_.contact_phases == ContactFormulation::Reduced) chart_ = make_phase_chart(m_);
     if (chart_) {
       SessionSettings sr = s;
-      sr.adams = opt_.contact_adams;
+      sr.adams = contact_adams_;
       reduced_.resize(static_cast<std::size_t>(2 * K_ + 1));
       for (int r = 1; r <= 2 * K_ && r < n_; ++r)
         reduced_[static_cast<std::size_t>(r)] =
@@ -479,6 +500,7 @@ class Engine {
   PhaseSession* cur_ = nullptr;
   Phase books_ = Phase::Free;
   bool omega_witness_ = false;
+  bool adams_ = true, contact_adams_ = true;  // the families chosen (choose_methods)
   double t_end_ = 0, phase_start_ = 0, t_restart_ = 0;
   /// The last step the integrator took (the next order's scale); before any step, the first
   /// step's horizon.
@@ -496,18 +518,19 @@ class Engine {
 
 RunSummary Engine::run(const MechanicalState& init, double t_end) {
   t_end_ = t_end;
+  const std::string chosen = choose_methods(init);
   open_sessions();
   const std::string phases =
       !chart_ ? std::string("bdf+projection")
-              : fmt::format("reduced+{}{}", opt_.contact_adams ? "adams" : "bdf",
+              : fmt::format("reduced+{}{}", contact_adams_ ? "adams" : "bdf",
                             K_ > 1 ? " (bdf+projection where the ring chart does not apply)" : "");
   const std::string contacts = K_ > 1 ? fmt::format("\"contacts\": {}, ", K_) : std::string();
   env_.emplace(opt_, sink_, init.t, t_end, m_.mechanical_energy(init.t, init.q, init.v), law(0).mu,
                "event",
                fmt::format("{{\"rtol\": {:.3g}, \"atol\": {:.3g}, \"free_flight\": \"{}\", "
-                           "\"contact_phases\": \"{}\", {}\"adams_iteration\": \"{}\", "
+                           "\"contact_phases\": \"{}\", {}{}\"adams_iteration\": \"{}\", "
                            "\"output_dt\": {:.6g}}}",
-                           opt_.rtol, opt_.atol, opt_.adams ? "adams" : "bdf", phases, contacts,
+                           opt_.rtol, opt_.atol, adams_ ? "adams" : "bdf", phases, chosen, contacts,
                            opt_.fixed_point ? "fixed-point" : "newton", opt_.output_dt));
   RunSummary& sum = env_->summary();
   // The event solver resolves the contact to round-off: a penetration beyond a millionth of the

@@ -1765,16 +1765,17 @@ class Loader {
             "must be one of " + solver_names(", ") + suggestion(so.kind, kinds));
     }
     const bool fixed_step = solver && solver->fixed_step;
-    if (so.method != "bdf" && so.method != "adams") {
-      issue("solver.method", at("solver.method"), "\"" + so.method + "\"", "must be bdf or adams");
+    if (so.method != "auto" && so.method != "bdf" && so.method != "adams") {
+      issue("solver.method", at("solver.method"), "\"" + so.method + "\"",
+            "must be auto, bdf or adams");
     }
     if (so.contact_phases != "reduced" && so.contact_phases != "projection") {
       issue("solver.contact_phases", at("solver.contact_phases"), "\"" + so.contact_phases + "\"",
             "must be reduced or projection");
     }
-    if (so.contact_method != "bdf" && so.contact_method != "adams") {
+    if (so.contact_method != "auto" && so.contact_method != "bdf" && so.contact_method != "adams") {
       issue("solver.contact_method", at("solver.contact_method"), "\"" + so.contact_method + "\"",
-            "must be bdf or adams");
+            "must be auto, bdf or adams");
     }
     if (so.projection != "mass" && so.projection != "identity") {
       issue("solver.projection", at("solver.projection"), "\"" + so.projection + "\"",

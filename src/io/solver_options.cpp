@@ -53,14 +53,22 @@ std::string solver_names(std::string_view separator) {
   return s;
 }
 
+namespace {
+MultistepMethod multistep(const std::string& word) {
+  return word == "adams" ? MultistepMethod::Adams
+         : word == "bdf" ? MultistepMethod::BDF
+                         : MultistepMethod::Auto;
+}
+}  // namespace
+
 EventDrivenOptions event_driven_options(const CaseSpec& spec) {
   EventDrivenOptions opt;
   opt.rtol = spec.solver.rtol;
   opt.atol = spec.solver.atol;
-  opt.adams = spec.solver.method == "adams";
+  opt.method = multistep(spec.solver.method);
   opt.contact_phases = spec.solver.contact_phases == "projection" ? ContactFormulation::Projection
                                                                   : ContactFormulation::Reduced;
-  opt.contact_adams = spec.solver.contact_method == "adams";
+  opt.contact_method = multistep(spec.solver.contact_method);
   opt.output_dt = spec.output.dt;
   opt.omega_lim = spec.run.omega_lim;
   opt.max_events_per_second = spec.solver.max_events_per_second;

@@ -317,7 +317,7 @@ TEST_CASE("Loose tolerances: output times passed by a single step around a root 
   EventDrivenOptions opt;
   opt.rtol = adams ? 1e-6 : 1e-5;
   opt.atol = opt.rtol * 1e-2;
-  opt.adams = adams;
+  opt.method = adams ? MultistepMethod::Adams : MultistepMethod::BDF;
   INFO("adams " << adams);
   const RunSummary s = run_event_driven(model, s0, 0.5, opt, sink);
   INFO(s.message);

@@ -80,3 +80,17 @@ def orbit_difference(a, b, nodes, dt=1e-4, column="omega"):
 def events(summary):
     e = summary["events"]
     return ", ".join(f"{n} {k}" for k, n in e.items() if n)
+
+
+def node_difference(a, b, cols):
+    """The largest distance between two runs' points (cols = their x and y columns) over the
+    times both wrote (the output grid: the event solvers' rows at events fall on other times;
+    of two rows at one time the last, after the event)."""
+    def rows(folder):
+        d = np.genfromtxt(os.path.join(folder, "timeseries.csv"), delimiter=",", names=True)
+        keep = np.r_[d["t"][1:] != d["t"][:-1], True]
+        return d[keep]
+    da, db = rows(a), rows(b)
+    common, ia, ib = np.intersect1d(da["t"], db["t"], return_indices=True)
+    x, y = cols
+    return float(np.max(np.hypot(da[x][ia] - db[x][ib], da[y][ia] - db[y][ib])))

@@ -86,17 +86,22 @@ enum class ContactFormulation {
   Projection
 };
 
+/// A CVODE multistep family, or the choice left to the model's stiffness (hybrid/method_choice.hpp:
+/// BDF when the ratio of its fastest to its slowest time scale exceeds kStiffRatio, else Adams).
+enum class MultistepMethod { Auto, Adams, BDF };
+
 /// The integrator's own options, beside the run controls every solver shares (output_dt,
 /// omega_lim, progress, stop, max_wall: core/run_envelope.hpp).
 struct EventDrivenOptions : RunControls {
   double rtol = 1e-10;
   double atol = 1e-12;  ///< absolute tolerance on positions [m]; velocities: atol * 1e3 [m/s]
-  /// Free flight with Adams-Moulton (fixed-point iteration) instead of BDF. Measured on the
-  /// reference case at rtol 1e-10: 3324 steps at 0.9 us vs 4801 at 1.9 us, orbit error
-  /// 3.6e-11 m vs 2.1e-10 m.
-  bool adams = true;
+  /// Free flight. Adams-Moulton (fixed-point iteration) where the model is not stiff: measured on
+  /// the reference case at rtol 1e-10, 3324 steps at 0.9 us vs BDF's 4801 at 1.9 us, orbit error
+  /// 3.6e-11 m vs 2.1e-10 m; BDF where it is (a finite-element shaft: 5016 steps vs Adams'
+  /// 289k, docs/fe-rotors.md). Auto decides by the model (summary.json says which and why).
+  MultistepMethod method = MultistepMethod::Auto;
   ContactFormulation contact_phases = ContactFormulation::Reduced;
-  bool contact_adams = true;  ///< reduced contact phases with Adams (false: BDF)
+  MultistepMethod contact_method = MultistepMethod::Auto;  ///< reduced contact phases
   /// Adams phases solve their implicit corrector by fixed-point iteration (no Jacobian, no
   /// linear algebra) instead of Newton with a difference-quotient Jacobian.
   bool fixed_point = true;

@@ -39,11 +39,13 @@ struct RunOptions {
 struct SolverOptions {
   std::string kind = "event";  ///< a solver of the registry (io/solver_options.hpp)
   // event-driven
-  double rtol = 1e-10;           ///< relative tolerance
-  double atol = 1e-12;           ///< absolute tolerance, scaled per component by the solver
-  std::string method = "adams";  ///< free flight: adams | bdf (CVODE multistep family)
+  double rtol = 1e-10;  ///< relative tolerance
+  double atol = 1e-12;  ///< absolute tolerance, scaled per component by the solver
+  /// free flight: auto | adams | bdf (CVODE multistep family; auto: bdf when the model is stiff,
+  /// hybrid/method_choice.hpp)
+  std::string method = "auto";
   std::string contact_phases = "reduced";  ///< reduced (minimal coordinates) | projection (DAE)
-  std::string contact_method = "adams";    ///< reduced contact phases: adams | bdf
+  std::string contact_method = "auto";     ///< reduced contact phases: auto | adams | bdf
   double max_events_per_second = 1e6;      ///< chattering guard: events per simulated second
   // fixed-step
   double h = 1e-6;                  ///< time step [s]

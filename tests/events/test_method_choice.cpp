@@ -1,0 +1,109 @@
+// The event solver's multistep method chosen by the model's stiffness (solver.method = "auto",
+// hybrid/method_choice.hpp): the time scales against the Jeffcott rotor's closed forms, the
+// verdict on each side of the threshold, and the run that follows it.
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "rubdyn/hybrid/event_driven.hpp"
+#include "rubdyn/hybrid/method_choice.hpp"
+#include "rubdyn/model/jeffcott_model.hpp"
+
+using namespace rubdyn;
+
+namespace {
+
+/// A Jeffcott rotor whose free flight has the closed-form time scales sqrt(k_r / m_r) = 1000 and
+/// sqrt(k_s / m_s) rad/s, damping rates c_r / m_r = 60 and c_s / m_s = 50 1/s (no coupling
+/// between rotor and ring without contact; the spin is not a vibration).
+JeffcottParams scene(double stator_omega) {
+  JeffcottParams p;
+  p.rotor.mass = 5.0;
+  p.rotor.k = 5.0e6;
+  p.rotor.c = 300.0;
+  p.stator.mass = 2.0;
+  p.stator.k = 2.0 * stator_omega * stator_omega;
+  p.stator.c = 100.0;
+  p.loads.unbalance = 1e-4;  // the spin angle then has a small stiffness under gravity: left out
+  p.loads.gravity = 9.81;
+  return p;
+}
+
+MechanicalState spinning(const LagrangianModel& m) {
+  MechanicalState s(m.num_dofs());
+  s.v[JeffcottModel::TH] = 800.0;
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("Method choice: the Jeffcott rotor's time scales are its closed forms, the spin left out",
+          "[events][method]") {
+  const JeffcottModel m(scene(2000.0));
+  const MechanicalState s = spinning(m);
+  const StiffnessAssessment a = assess_stiffness(m, s.t, s.q, s.v);
+  // The generalised symmetric eigensolver's error is a few eps of the largest eigenvalue
+  // (omega^2 = 4e6): 1e-12 relative on the frequencies is far above it and far below any
+  // mistake in what enters the matrices (a missed mass or stiffness changes them by O(1)).
+  CHECK(a.omega_max == Approx(2000.0).epsilon(1e-12));
+  CHECK(a.omega_min == Approx(1000.0).epsilon(1e-12));
+  CHECK(a.decay_max == Approx(60.0).epsilon(1e-12));
+  CHECK(a.ratio == Approx(2.0).epsilon(1e-12));
+  CHECK_FALSE(a.stiff);
+  CHECK(a.reason().find("ratio 2 <= 100") != std::string::npos);
+}
+
+TEST_CASE("Method choice: a ring 200 times faster than the rotor is stiff, 50 times is not",
+          "[events][method]") {
+  for (const double factor : {50.0, 200.0}) {
+    const JeffcottModel m(scene(1000.0 * factor));
+    const MechanicalState s = spinning(m);
+    const StiffnessAssessment a = assess_stiffness(m, s.t, s.q, s.v);
+    INFO("factor " << factor << ": " << a.reason());
+    CHECK(a.ratio == Approx(factor).epsilon(1e-12));
+    CHECK(a.stiff == (factor > kStiffRatio));
+  }
+}
+
+TEST_CASE("Method choice: auto runs Adams on a soft model bit for bit, BDF on a stiff one",
+          "[events][method]") {
+  const auto run = [](const JeffcottModel& m, MultistepMethod method) {
+    EventDrivenOptions opt;
+    opt.rtol = 1e-8;
+    opt.atol = 1e-12;
+    opt.method = method;
+    opt.contact_method = method;
+    MemorySink sink;
+    run_event_driven(m, spinning(m), 0.01, opt, sink);
+    REQUIRE(sink.summary.complete());
+    return sink;
+  };
+  SECTION("soft: the same bits as Adams given") {
+    const JeffcottModel m(scene(2000.0));
+    const MemorySink a = run(m, MultistepMethod::Auto), b = run(m, MultistepMethod::Adams);
+    CHECK(a.summary.options.find("\"free_flight\": \"adams\"") != std::string::npos);
+    CHECK(a.summary.options.find("free flight auto, contact phases auto") != std::string::npos);
+    CHECK(b.summary.options.find("free flight given, contact phases given") != std::string::npos);
+    REQUIRE(a.samples.size() == b.samples.size());
+    for (std::size_t i = 0; i < a.samples.size(); ++i) {
+      INFO("sample " << i);
+      REQUIRE(a.samples[i].t == b.samples[i].t);
+      REQUIRE(a.samples[i].q == b.samples[i].q);
+      REQUIRE(a.samples[i].v == b.samples[i].v);
+    }
+  }
+  SECTION("stiff: BDF, the same bits as BDF given, and fewer steps than Adams") {
+    const JeffcottModel m(scene(1000.0 * 300.0));
+    const MemorySink a = run(m, MultistepMethod::Auto), b = run(m, MultistepMethod::BDF),
+                     c = run(m, MultistepMethod::Adams);
+    CHECK(a.summary.options.find("\"free_flight\": \"bdf\"") != std::string::npos);
+    CHECK(a.summary.options.find("ratio 300 > 100") != std::string::npos);
+    REQUIRE(a.samples.size() == b.samples.size());
+    for (std::size_t i = 0; i < a.samples.size(); ++i) {
+      INFO("sample " << i);
+      REQUIRE(a.samples[i].q == b.samples[i].q);
+      REQUIRE(a.samples[i].v == b.samples[i].v);
+    }
+    // the reason for the choice: Adams' step is bounded by the ring's 3e5 rad/s
+    CHECK(a.summary.steps < c.summary.steps);
+  }
+}
