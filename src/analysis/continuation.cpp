@@ -39,7 +39,8 @@ struct Eval {
   bool ok = false;
   std::string why;
   FlowRun run;
-  Vec G;  // coords(P(x)) - coords(x)
+  std::string signature;  // the run's events (event_signature)
+  Vec G;                  // coords(P(x)) - coords(x)
 };
 
 Eval evaluate(const ModelFamily& family, const SectionChart& chart, VecIn xi, double lambda,
@@ -66,6 +67,7 @@ Eval evaluate(const ModelFamily& family, const SectionChart& chart, VecIn xi, do
                         to_string(e.run.summary.termination), e.run.summary.message);
     return e;
   }
+  e.signature = event_signature(e.run, pm.t0);
   e.G = chart.coords(stacked_state(e.run.samples.back())) -
         chart.coords(stacked_state(e.run.samples.front()));
   e.ok = true;
@@ -176,6 +178,11 @@ struct Corrected {
   Vec u;
   Eval eval;
   int iterations = 0;
+  /// An iterate whose orbit has other events than the point corrected from (a grazing or a
+  /// lift-off crossed): its parameter and events, kept when the corrector fails.
+  bool events_changed = false;
+  double changed_lambda = 0.0;
+  std::string changed_signature;
 };
 bool correct(const ModelFamily& family, const PointData& from, double s,
              const ContinuationOptions& opt, Corrected& out, std::string& why, long& runs) {
@@ -195,6 +202,11 @@ bool correct(const ModelFamily& family, const PointData& from, double s,
     if (!e.ok) {
       why = e.why;
       return false;
+    }
+    if (e.signature != from.p.signature && !out.events_changed) {
+      out.events_changed = true;
+      out.changed_lambda = u(d) * opt.lambda_scale;
+      out.changed_signature = e.signature;
     }
     Vec F(d + 1);
     F.head(d) = e.G;
@@ -265,19 +277,46 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
     pts.push_back(std::move(p0));
   }
   double ds = opt.ds;
+  // the failed corrections from the current point whose iterates saw other events
+  bool changed = false;
+  double changed_lambda = 0.0;
+  std::string changed_signature;
   while (static_cast<int>(b.points.size()) < opt.max_points) {
     const PointData& cur = pts.back();
     const long runs_before = runs;
     Corrected c;
     std::string why;
     if (!correct(family, cur, ds, opt, c, why, runs)) {
+      if (c.events_changed) {  // (kept over the halvings: the nearest crossing is the last)
+        changed = true;
+        changed_lambda = c.changed_lambda;
+        changed_signature = c.changed_signature;
+      }
       ds *= 0.5;
+      if (ds < opt.ds_min && changed) {
+        // Newton does not converge across a grazing or a lift-off (the return map is not
+        // smooth there), so the branch of smooth orbits ends where its iterates saw other
+        // events: between the last point and the nearest such iterate
+        BranchSpecial sp;
+        sp.kind = "events_change";
+        sp.after = static_cast<int>(b.points.size()) - 1;
+        sp.lambda = changed_lambda;
+        sp.how = fmt::format(
+            "the corrector's iterate at {:.10g} has the events [{}] instead of [{}], and no step "
+            "down to ds_min = {:.3g} converges from the last point ({:.10g}): the return map is "
+            "not smooth there (a grazing or a lift-off near these values), where the branch of "
+            "smooth orbits ends",
+            changed_lambda, changed_signature, cur.p.signature, opt.ds_min, cur.p.lambda);
+        b.specials.push_back(sp);
+        return done("events_change", sp.how);
+      }
       if (ds < opt.ds_min)
         return done("step_failed",
                     fmt::format("no step below ds_min = {:.3g} from lambda = {:.10g}: {}",
                                 opt.ds_min, cur.p.lambda, why));
       continue;
     }
+    changed = false;
     const int d = cur.chart->dim();
     const double lambda = c.u(d) * opt.lambda_scale;
     if (lambda < opt.lambda_min || lambda > opt.lambda_max)

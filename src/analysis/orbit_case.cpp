@@ -401,7 +401,11 @@ std::string branch_json(const CaseBranch& b) {
     const auto& x = r.specials[i];
     fmt::format_to(out,
                    "{}\n    {{\"kind\": {}, \"value\": {}, \"between\": [{}, {}], \"how\": {}}}",
-                   i ? "," : "", str(x.kind), num(x.lambda), x.after, x.after + 1, str(x.how));
+                   i ? "," : "", str(x.kind), num(x.lambda), x.after,
+                   // null: beyond the last point (the corrector's iterates crossed it)
+                   x.after + 1 < static_cast<int>(r.points.size()) ? std::to_string(x.after + 1)
+                                                                   : std::string("null"),
+                   str(x.how));
   }
   fmt::format_to(out, "\n  ],\n  \"runs\": {},\n  \"wall_seconds\": {}\n}}\n", r.runs,
                  num(r.wall_seconds));

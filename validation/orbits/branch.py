@@ -14,6 +14,7 @@ import argparse
 import csv
 import json
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -43,6 +44,22 @@ def discriminant(P, om):
     a, b, mu = s["g0"] * K.real, s["g0"] * K.imag, s["mu"]
     A2, A1, A0 = 1 + mu * mu, 2 * (a + mu * b), a * a + b * b - rhs
     return A1 * A1 - 4 * A2 * A0
+
+
+def landing(end, rows):
+    """How the branch's end was seen: the corrector converged on an orbit with other events (the
+    last row), or its iterates reached one and no step converged (no row: the events are in the
+    special's text)."""
+    last = float(rows[end["between"][0]]["initial.omega0"])
+    if end["between"][1] is not None:
+        return (f"the events change between {last:.6f} and {end['value']:.6f} rad/s, where the "
+                "corrector lands on an orbit in free flight throughout "
+                f"(`{rows[-1]['events']}`)")
+    m = re.search(r"has the events \[(.*?)\]", end["how"])
+    return (f"the last smooth orbit at {last:.6f} rad/s (F_N >= "
+            f"{float(rows[end['between'][0]]['F_N_min']):.3g} N); beyond it no corrector step "
+            f"converges, its iterate at {end['value']:.6f} rad/s being a motion in free flight "
+            f"throughout (`{m.group(1) if m else '?'}`)")
 
 
 def main():
@@ -110,10 +127,8 @@ def main():
         f"(5.2) vanishes) {fold:.10f} rad/s; difference {folds[0]['value'] - fold:.2e} rad/s "
         f"({(folds[0]['value'] - fold) / fold:.1e} relative). {folds[0]['how']}."
         if folds else "- fold: NOT FOUND",
-        f"- end of the saddle branch: the events change between "
-        f"{float(rows[ends[0]['between'][0]]['initial.omega0']):.6f} and "
-        f"{ends[0]['value']:.6f} rad/s, where the corrector lands on an orbit in free flight "
-        f"throughout (`{rows[-1]['events']}`): the free unbalance orbit, which the saddle branch "
+        f"- end of the saddle branch: {landing(ends[0], rows)}: the free unbalance orbit, which "
+        f"the saddle branch "
         f"meets where its contact force vanishes; closed form: the smaller root's N = 0 (the free "
         f"orbit's amplitude equals the gap) at {graze:.6f} rad/s."
         if ends else "- end: " + meta["outcome"],
