@@ -77,12 +77,11 @@ int branch_command(BranchArgs& a) {
   }
   for (const auto& s : r.specials) {
     // (a special beyond the last point: the corrector's iterates crossed it, no point after it)
-    const std::string where =
-        s.after + 1 < static_cast<int>(r.points.size())
-            ? fmt::format("between points {} and {}", s.after, s.after + 1)
-            : fmt::format("after point {}, the last", s.after);
-    std::printf("%-13s %s = %.12g %s: %s\n", s.kind.c_str(), b.key.c_str(), s.lambda,
-                where.c_str(), s.how.c_str());
+    const std::string where = s.after + 1 < static_cast<int>(r.points.size())
+                                  ? fmt::format("between points {} and {}", s.after, s.after + 1)
+                                  : fmt::format("after point {}, the last", s.after);
+    std::printf("%-13s %s = %.12g %s: %s\n", s.kind.c_str(), b.key.c_str(), s.lambda, where.c_str(),
+                s.how.c_str());
   }
   std::printf("cost          %ld runs of the return map in %.2f s\n", r.runs, r.wall_seconds);
   std::printf("output        %s/\n", dir.c_str());

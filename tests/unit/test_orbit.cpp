@@ -603,6 +603,72 @@ TEST_CASE(
   CHECK(m1 > 1.0);
 }
 
+// The saddle branch of the same full rub ends where its contact force vanishes: below that speed
+// the free unbalance orbit clears the ring (docs/closed-forms.md 5.1: the smaller root's N = 0).
+// Newton does not converge across that lift-off (the return map is not smooth there), so the
+// continuation must end as the events' change it is, never as a failed step (it did, on the one
+// engine, 0.026 rad/s before the closed form's lift-off: validation/orbits/branch.md).
+TEST_CASE(
+    "orbit: the continuation down the saddle branch ends as an events change at the closed "
+    "form's lift-off",
+    "[orbit]") {
+  FullRubSet p;
+  p.rigid = false;
+  const std::string text = case_text(p, 1e-10, 1e-12);
+  const ModelFamily family = [&](double omega) {
+    const CaseSpec spec = parse_case(text, "full-rub.toml", {"initial.omega0=" + fmt_g(omega)});
+    ParameterModel pm;
+    pm.model = build_model(spec);
+    pm.omega = omega;
+    pm.period = 2 * std::numbers::pi / omega;
+    pm.options = event_driven_options(spec);
+    return pm;
+  };
+  auto smaller_N = [&](double omega) {
+    FullRubSet q = p;
+    q.Omega = omega;
+    return full_rub_roots(q)[1].N;
+  };
+  double lo = 1250.0, hi = 1295.0;  // N(lo) < 0 < N(hi) on the smaller root
+  REQUIRE(smaller_N(lo) < 0.0);
+  REQUIRE(smaller_N(hi) > 0.0);
+  while (hi - lo > 1e-9) {
+    const double mid = 0.5 * (lo + hi);
+    (smaller_N(mid) > 0.0 ? hi : lo) = mid;
+  }
+  const double liftoff = 0.5 * (lo + hi);  // 1288.0765 (validation/orbits/branch.md)
+  FullRubSet start = p;
+  start.Omega = 1295.0;
+  ContinuationOptions opt;
+  opt.lambda_scale = 15.0;
+  opt.ds = 0.05;
+  opt.ds_max = 0.2;
+  opt.max_points = 100;
+  opt.direction = -1;
+  const Branch b =
+      continue_forced_orbit(family, 1295.0, orbit_state(start, full_rub_roots(start)[1]), opt);
+  INFO(b.outcome << ": " << b.message);
+  REQUIRE(b.outcome == "events_change");
+  REQUIRE(!b.specials.empty());
+  const BranchSpecial& e = b.specials.back();
+  CHECK(e.kind == "events_change");
+  for (const BranchPoint& q : b.points) {
+    INFO("point at " << q.lambda);
+    if (q.floquet.reason.empty()) CHECK(q.signature == "slip- | | slip-");
+  }
+  // Every smooth point is in contact, above the lift-off; the branch ends within 0.1 rad/s of
+  // it. The corrector's smallest step, ds_min = 1e-3 of the arclength scaled by lambda_scale =
+  // 15 rad/s, moves the speed by at most 0.015 rad/s, and Newton stops converging a few such
+  // steps before the lift-off, where the contact force is small and the map's nonsmoothness
+  // within its iterates' reach (measured: the last point 0.026 rad/s above, the iterate that saw
+  // free flight 0.008 rad/s above). 0.1 rad/s is about seven smallest steps, and 3.5 % of the
+  // distance the branch covers from 1295 rad/s.
+  const BranchPoint& last = b.points.back();
+  CHECK(last.lambda >= liftoff);
+  CHECK(last.lambda - liftoff <= 0.1);
+  CHECK(std::abs(e.lambda - liftoff) <= 0.1);
+}
+
 // Step 5 of issue 33: autonomous orbits. Black's rolling orbits (docs/closed-forms.md 3, the set
 // BLACK_ROLL: both branches of the bistable sprung-stator case) under a constant torque: the
 // period is an unknown, the spin angle cyclic (pinned), the trivial multiplier 1.
