@@ -19,6 +19,7 @@ packages=(
   python3-matplotlib python3-numpy python3-scipy   # figures and studies in validation/
   pybind11-dev python3-pybind11 python3-dev   # the Python module rubdyn (python/)
   python3-pytest       # its tests (python/tests, run through ctest)
+  valgrind             # memcheck tests of the event engine; bench/instructions.py
 )
 
 if [ "${1:-}" = "--peer" ]; then
