@@ -191,6 +191,36 @@ struct CvodeSession::Impl {
     return self->cb.jac(t, N_VGetArrayPointer(y), N_VGetArrayPointer(fy), SM_DATA_D(J),
                         self->cb.user);
   }
+  // The structured Newton systems (cb.lsys, cb.lsolve): CVODE calls linsys when it would form
+  // I - gamma J (its own heuristics decide when J is re-evaluated: jok), then the linear
+  // solver's setup (nothing left to do) and solve. The custom matrix is an empty handle: with a
+  // user linsys CVODE calls none of its operations but getid.
+  static int linsys(realtype t, N_Vector y, N_Vector, SUNMatrix, booleantype jok, booleantype* jcur,
+                    realtype gamma, void* ud, N_Vector, N_Vector, N_Vector) {
+    auto* self = static_cast<Impl*>(ud);
+    int cur = 0;
+    const int r = self->cb.lsys(t, N_VGetArrayPointer(y), gamma, jok ? 1 : 0, &cur, self->cb.user);
+    *jcur = cur ? SUNTRUE : SUNFALSE;
+    if (cur) ++self->structured_jacs;
+    return r;
+  }
+  static SUNMatrix_ID custom_matrix_id(SUNMatrix) { return SUNMATRIX_CUSTOM; }
+  static SUNLinearSolver_Type custom_ls_type(SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; }
+  static SUNLinearSolver_ID custom_ls_id(SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; }
+  static int custom_ls_setup(SUNLinearSolver, SUNMatrix) { return SUNLS_SUCCESS; }
+  static int custom_ls_solve(SUNLinearSolver S, SUNMatrix, N_Vector x, N_Vector b, realtype) {
+    auto* self = static_cast<Impl*>(S->content);
+    return self->cb.lsolve(N_VGetArrayPointer(b), N_VGetArrayPointer(x), self->cb.user) == 0
+               ? SUNLS_SUCCESS
+               : SUNLS_PACKAGE_FAIL_REC;
+  }
+  static int custom_ls_free(SUNLinearSolver S) {
+    S->content = nullptr;
+    SUNLinSolFreeEmpty(S);
+    return SUNLS_SUCCESS;
+  }
+  long structured_jacs = 0;  // since the restart (CVODE counts only its own linsys' Jacobians)
+
   static int roots(realtype t, N_Vector y, realtype* g, void* ud) {
     auto* self = static_cast<Impl*>(ud);
     return self->cb.roots(t, N_VGetArrayPointer(y), g, self->cb.user);
@@ -226,7 +256,7 @@ struct CvodeSession::Impl {
     s.rhs_evals += v;
     if (LS) {  // a fixed-point session has no linear solver (and no Jacobian)
       CVodeGetNumJacEvals(mem, &v);
-      s.jac_evals += v;
+      s.jac_evals += v + structured_jacs;
     }
     CVodeGetNumGEvals(mem, &v);
     s.root_evals += v;
@@ -276,6 +306,20 @@ CvodeSession::CvodeSession(const CvodeConfig& cfg, const CvodeCallbacks& cb)
     I.NLS = SUNNonlinSol_FixedPoint(I.y, 0, I.ctx);
     if (!I.NLS) throw std::runtime_error("CVODE: SUNNonlinSol_FixedPoint failed");
     check(CVodeSetNonlinearSolver(I.mem, I.NLS), "CVodeSetNonlinearSolver");
+  } else if (cb.lsys && cb.lsolve) {
+    I.A = SUNMatNewEmpty(I.ctx);
+    if (!I.A) throw std::runtime_error("CVODE: SUNMatNewEmpty failed (out of memory)");
+    I.A->ops->getid = &Impl::custom_matrix_id;
+    I.LS = SUNLinSolNewEmpty(I.ctx);
+    if (!I.LS) throw std::runtime_error("CVODE: SUNLinSolNewEmpty failed (out of memory)");
+    I.LS->content = &I;
+    I.LS->ops->gettype = &Impl::custom_ls_type;
+    I.LS->ops->getid = &Impl::custom_ls_id;
+    I.LS->ops->setup = &Impl::custom_ls_setup;
+    I.LS->ops->solve = &Impl::custom_ls_solve;
+    I.LS->ops->free = &Impl::custom_ls_free;
+    check(CVodeSetLinearSolver(I.mem, I.LS, I.A), "CVodeSetLinearSolver");
+    check(CVodeSetLinSysFn(I.mem, &Impl::linsys), "CVodeSetLinSysFn");
   } else {
     I.A = SUNDenseMatrix(n, n, I.ctx);
     if (!I.A) throw std::runtime_error("CVODE: SUNDenseMatrix failed (out of memory)");
@@ -296,6 +340,7 @@ void CvodeSession::restart(double t0, const double* y0, int n_roots, const int* 
                            bool projection, double h_init, double t_stop) {
   auto& I = *impl_;
   I.collect();
+  I.structured_jacs = 0;  // (counted since the restart, as CVODE's own counters)
   std::memcpy(N_VGetArrayPointer(I.y), y0, sizeof(double) * I.n);
   I.y0.assign(y0, y0 + I.n);
   I.t0 = t0;

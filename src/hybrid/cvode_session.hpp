@@ -1,6 +1,7 @@
 #pragma once
-// CvodeSession: RAII over one CVODES integrator (SUNDIALS 6.4.1) with dense linear algebra or
-// fixed-point iteration, root finding and optional projection. This file and
+// CvodeSession: RAII over one CVODES integrator (SUNDIALS 6.4.1) with dense linear algebra, the
+// caller's structured Newton solves (a SUNDIALS custom matrix and linear solver) or fixed-point
+// iteration, root finding and optional projection. This file and
 // cvode_session.cpp are the ONLY ones that include SUNDIALS headers; SUNDIALS return flags become
 // exceptions or statuses here.
 //
@@ -17,6 +18,12 @@ struct CvodeCallbacks {
   /// Dense Jacobian d(ydot)/dy, column-major n x n (ld = n). Null: difference quotients.
   int (*jac)(double t, const double* y, const double* ydot, double* J, void* user) = nullptr;
   int (*roots)(double t, const double* y, double* g, void* user) = nullptr;
+  /// Structured Newton systems instead of the dense matrix (both or neither; then `jac` is not
+  /// used): lsys prepares the solves with I - gamma J at (t, y), re-evaluating J unless jok (then
+  /// setting *jcur = 1, else 0), as CVODE decides; lsolve solves (I - gamma J) x = b (x and b
+  /// distinct, of size n).
+  int (*lsys)(double t, const double* y, double gamma, int jok, int* jcur, void* user) = nullptr;
+  int (*lsolve)(const double* b, double* x, void* user) = nullptr;
   /// Projection: fill corr so that y + corr satisfies the constraints (BDF only).
   int (*proj)(double t, const double* y, double* corr, void* user) = nullptr;
   void* user = nullptr;

@@ -111,7 +111,12 @@ PhaseSession::PhaseSession(const PhaseContext& ctx, const SessionSettings& s, Se
     case SessionKind::Free:
       cb.rhs = &PhaseSession::rhs_free;
       if (!c.fixed_point) {
-        cb.jac = &PhaseSession::jac_free;
+        cb.lsys = &PhaseSession::lsys_free;
+        cb.lsolve = &PhaseSession::lsolve_free;
+        S_.setZero(n_, n_);
+        rhs_n_.setZero(n_);
+        dv_.setZero(n_);
+        lu_.compute(Mat::Identity(n_, n_));  // (sized here: no allocation in the solves)
         M_.setZero(n_, n_);
         dfdq_.setZero(n_, n_);
         dfdv_.setZero(n_, n_);
@@ -265,6 +270,50 @@ int PhaseSession::jac_free(double t, const double* y, const double*, double* J, 
   Jm.block(n, 0, n, n) = self->ldlt_.solve(self->dfdq_);
   Jm.block(n, n, n, n) = self->ldlt_.solve(self->dfdv_);
   return 0;
+}
+
+// The Newton system of free flight, (I - gamma J) x = b with J = [[0, I, 0], [A_q, A_v, 0],
+// [0, 0, 0]] on (q, v, works) (the works' rows left 0 as in jac_free), A_q = M^-1 (df/dq -
+// d(M a)/dq), A_v = M^-1 df/dv: the first block row gives x_q = b_q + gamma x_v, and M times the
+// second, (M - gamma df/dv - gamma^2 (df/dq - d(M a)/dq)) x_v = M b_v + gamma (df/dq - d(M a)/dq)
+// b_q, one n x n factorisation instead of one of 2n + 3 (8x fewer operations), and no M^-1 J.
+int PhaseSession::lsys_free(double t, const double* y, double gamma, int jok, int* jcur,
+                            void* user) {
+  auto* self = static_cast<PhaseSession*>(user);
+  const LagrangianModel& m = self->m_;
+  const int n = self->n_;
+  if (!jok) {
+    const CMap q(y, n), v(y + n, n);
+    m.mass_matrix(q, self->M_);
+    m.smooth_forces(t, q, v, self->f_);
+    m.smooth_force_jacobians(t, q, v, self->dfdq_, self->dfdv_);
+    self->ldlt_.compute(self->M_);
+    self->a_ = self->ldlt_.solve(self->f_);
+    m.mass_matrix_product_jacobian(q, self->a_, self->dMa_);
+    self->dfdq_ -= self->dMa_;
+    *jcur = 1;
+  } else {
+    *jcur = 0;
+  }
+  self->gamma_ = gamma;
+  self->S_ = self->M_;
+  self->S_.noalias() -= gamma * self->dfdv_;
+  self->S_.noalias() -= (gamma * gamma) * self->dfdq_;
+  self->lu_.compute(self->S_);
+  return all_finite(self->S_) ? 0 : 1;
+}
+
+int PhaseSession::lsolve_free(const double* b, double* x, void* user) {
+  auto* self = static_cast<PhaseSession*>(user);
+  const int n = self->n_;
+  const CMap bq(b, n), bv(b + n, n);
+  self->rhs_n_.noalias() = self->M_ * bv;
+  self->rhs_n_.noalias() += self->gamma_ * (self->dfdq_ * bq);
+  self->dv_ = self->lu_.solve(self->rhs_n_);
+  VMap(x, n) = bq + self->gamma_ * self->dv_;
+  VMap(x + n, n) = self->dv_;
+  for (int i = 2 * n; i < 2 * n + kNw; ++i) x[i] = b[i];
+  return all_finite(self->dv_) ? 0 : 1;
 }
 
 int PhaseSession::rhs_projected(double t, const double* y, double* yd, void* user) {

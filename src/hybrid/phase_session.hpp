@@ -3,7 +3,7 @@
 // that touches SUNDIALS) per formulation, each with its own right-hand side, so that no
 // right-hand side branches on the formulation:
 //   Free       free flight in (q, v): a = M^{-1} f (one structured solve); Adams (fixed-point)
-//              or BDF with the analytic Jacobian
+//              or BDF with the analytic Jacobian, its Newton systems reduced to n x n (lsys_free)
 //   Projected  the closed contacts' index-reduced DAE in (q, v): BDF, CVODE's projection after
 //              every step (positions onto d_N,k = 0, velocities mass-weighted onto v_N,k = 0 and
 //              v_t,k = 0 in stick)
@@ -16,6 +16,7 @@
 // callback (right-hand side, Jacobian, projection, witnesses, the engine's queries) has its own
 // scratch, so that none overwrites another's.
 #include <Eigen/Cholesky>
+#include <Eigen/LU>
 #include <array>
 #include <memory>
 #include <span>
@@ -100,6 +101,14 @@ class PhaseSession {
   /// kinematics only (no solve with M; forces 0).
   void evaluate_witnesses(double t, Vec& q, Vec& v) const;
   const PhaseEval& eval() const { return query_; }
+
+  // Free flight's Newton systems (BDF), user = this session: the CVODE callbacks lsys and
+  // lsolve (cvode_session.hpp) of the structured solve, and the dense Jacobian it reduces (the
+  // state's 2n + 3 components, column-major), kept as its reference (tests/events/
+  // test_structured_newton.cpp).
+  static int jac_free(double t, const double* y, const double* yd, double* J, void* user);
+  static int lsys_free(double t, const double* y, double gamma, int jok, int* jcur, void* user);
+  static int lsolve_free(const double* b, double* x, void* user);
   /// The unscaled value of a witness after evaluate() or evaluate_witnesses().
   double witness_value(const WitnessRef& w, double t, const Vec& q, const Vec& v) const {
     return ctx_.witness_value(w, query_, t, q, v);
@@ -109,7 +118,6 @@ class PhaseSession {
   void to_full(const double* y, Vec& q, Vec& v) const;
   void powers(double t, VecIn q, VecIn v, const PhaseEval& e, double* w) const;
   static int rhs_free(double t, const double* y, double* yd, void* user);
-  static int jac_free(double t, const double* y, const double* yd, double* J, void* user);
   static int rhs_projected(double t, const double* y, double* yd, void* user);
   static int rhs_reduced(double t, const double* y, double* yd, void* user);
   static int proj(double t, const double* y, double* corr, void* user);
@@ -131,10 +139,13 @@ class PhaseSession {
   std::vector<double> lengths_;
   std::vector<double> rtol_, atol_, ys_;
   mutable std::vector<double> scratch_;
-  // free flight's Jacobian (BDF)
-  Mat M_, dfdq_, dfdv_, dMa_;
-  Vec f_, a_;
+  // free flight's Jacobian (BDF): M, df/dq - d(M a)/dq, df/dv at its state, and the Newton
+  // system reduced to the n x n S = M - gamma df/dv - gamma^2 (df/dq - d(M a)/dq) (lsys_free)
+  Mat M_, dfdq_, dfdv_, dMa_, S_;
+  Vec f_, a_, rhs_n_, dv_;
+  double gamma_ = 0.0;
   Eigen::LDLT<Mat> ldlt_;
+  Eigen::PartialPivLU<Mat> lu_;
   std::unique_ptr<CvodeSession> session_;
 };
 

@@ -67,5 +67,9 @@ TEST_CASE("No allocation per step: the matrices model at rest on the stator and 
   MechanicalState s1(spin.num_dofs());
   s1.v[4] = 2000.0;
   event_allocations(spin, s1, event_options(), 0.01, 0.02);
+  // and by BDF: the structured Newton systems (phase_session.cpp, lsys_free) factor in place
+  EventDrivenOptions bdf = event_options();
+  bdf.method = MultistepMethod::BDF;
+  event_allocations(spin, s1, bdf, 0.01, 0.02);
   fixed_step_allocations(spin, s1, kEveryScheme, step_options(1e-5), 0.01, 0.02);
 }
