@@ -248,25 +248,31 @@ int PhaseSession::rhs_free(double t, const double* y, double* yd, void* user) {
   return all_finite(a) ? 0 : 1;
 }
 
+// Free flight's Jacobian blocks at y: M, df/dv and df/dq - d(M a)/dq (in dfdq_), with M
+// factored (ldlt_) and a = M^{-1} f.
+void PhaseSession::free_jacobians(double t, const double* y) {
+  const int n = n_;
+  const CMap q(y, n), v(y + n, n);
+  m_.mass_matrix(q, M_);
+  m_.smooth_forces(t, q, v, f_);
+  m_.smooth_force_jacobians(t, q, v, dfdq_, dfdv_);
+  ldlt_.compute(M_);
+  a_ = ldlt_.solve(f_);
+  m_.mass_matrix_product_jacobian(q, a_, dMa_);
+  dfdq_ -= dMa_;
+}
+
 // Analytic Jacobian: d/dq (M^{-1} f) = M^{-1} (df/dq - d(M a)/dq), with a fixed.
 int PhaseSession::jac_free(double t, const double* y, const double*, double* J, void* user) {
   auto* self = static_cast<PhaseSession*>(user);
-  const LagrangianModel& m = self->m_;
   const int n = self->n_;
-  const CMap q(y, n), v(y + n, n);
-  m.mass_matrix(q, self->M_);
-  m.smooth_forces(t, q, v, self->f_);
-  m.smooth_force_jacobians(t, q, v, self->dfdq_, self->dfdv_);
-  self->ldlt_.compute(self->M_);
-  self->a_ = self->ldlt_.solve(self->f_);
-  m.mass_matrix_product_jacobian(q, self->a_, self->dMa_);
+  self->free_jacobians(t, y);
   // column-major N x N, as SUNDIALS' dense matrix; the rows of the works are left 0 (they feed
   // back into nothing, so Newton converges on them with the state)
   const int N = 2 * n + kNw;
   Eigen::Map<Mat> Jm(J, N, N);
   Jm.setZero();
   Jm.block(0, n, n, n).setIdentity();
-  self->dfdq_ -= self->dMa_;
   Jm.block(n, 0, n, n) = self->ldlt_.solve(self->dfdq_);
   Jm.block(n, n, n, n) = self->ldlt_.solve(self->dfdv_);
   return 0;
@@ -280,21 +286,8 @@ int PhaseSession::jac_free(double t, const double* y, const double*, double* J, 
 int PhaseSession::lsys_free(double t, const double* y, double gamma, int jok, int* jcur,
                             void* user) {
   auto* self = static_cast<PhaseSession*>(user);
-  const LagrangianModel& m = self->m_;
-  const int n = self->n_;
-  if (!jok) {
-    const CMap q(y, n), v(y + n, n);
-    m.mass_matrix(q, self->M_);
-    m.smooth_forces(t, q, v, self->f_);
-    m.smooth_force_jacobians(t, q, v, self->dfdq_, self->dfdv_);
-    self->ldlt_.compute(self->M_);
-    self->a_ = self->ldlt_.solve(self->f_);
-    m.mass_matrix_product_jacobian(q, self->a_, self->dMa_);
-    self->dfdq_ -= self->dMa_;
-    *jcur = 1;
-  } else {
-    *jcur = 0;
-  }
+  if (!jok) self->free_jacobians(t, y);
+  *jcur = jok ? 0 : 1;
   self->gamma_ = gamma;
   self->S_ = self->M_;
   self->S_.noalias() -= gamma * self->dfdv_;

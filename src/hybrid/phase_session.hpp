@@ -116,6 +116,7 @@ class PhaseSession {
 
  private:
   void to_full(const double* y, Vec& q, Vec& v) const;
+  void free_jacobians(double t, const double* y);
   void powers(double t, VecIn q, VecIn v, const PhaseEval& e, double* w) const;
   static int rhs_free(double t, const double* y, double* yd, void* user);
   static int rhs_projected(double t, const double* y, double* yd, void* user);

@@ -522,6 +522,24 @@ TEST_CASE(
   }
 }
 
+namespace {
+
+/// The full-rub case `text` as a family in its spin speed (initial.omega0), one period 2 pi /
+/// omega each.
+ModelFamily speed_family(const std::string& text) {
+  return [text](double omega) {
+    const CaseSpec spec = parse_case(text, "full-rub.toml", {"initial.omega0=" + fmt_g(omega)});
+    ParameterModel pm;
+    pm.model = build_model(spec);
+    pm.omega = omega;
+    pm.period = 2 * std::numbers::pi / omega;
+    pm.options = event_driven_options(spec);
+    return pm;
+  };
+}
+
+}  // namespace
+
 // Step 4 of issue 33: the continuation of the sprung ring's forward full rub in the spin speed
 // from 1750 rad/s (the larger, stable root) through the fold where it meets the saddle branch,
 // which docs/closed-forms.md 5.1 puts where the quadratic (5.2)'s discriminant vanishes.
@@ -531,16 +549,7 @@ TEST_CASE(
     "[orbit]") {
   FullRubSet p;
   p.rigid = false;
-  const std::string text = case_text(p, 1e-10, 1e-12);
-  const ModelFamily family = [&](double omega) {
-    const CaseSpec spec = parse_case(text, "full-rub.toml", {"initial.omega0=" + fmt_g(omega)});
-    ParameterModel pm;
-    pm.model = build_model(spec);
-    pm.omega = omega;
-    pm.period = 2 * std::numbers::pi / omega;
-    pm.options = event_driven_options(spec);
-    return pm;
-  };
+  const ModelFamily family = speed_family(case_text(p, 1e-10, 1e-12));
   // the closed-form fold: the discriminant of (5.2) in N vanishes (bisection on the number of
   // real roots, to 1e-9 rad/s)
   auto roots_at = [&](double omega) {
@@ -614,16 +623,7 @@ TEST_CASE(
     "[orbit]") {
   FullRubSet p;
   p.rigid = false;
-  const std::string text = case_text(p, 1e-10, 1e-12);
-  const ModelFamily family = [&](double omega) {
-    const CaseSpec spec = parse_case(text, "full-rub.toml", {"initial.omega0=" + fmt_g(omega)});
-    ParameterModel pm;
-    pm.model = build_model(spec);
-    pm.omega = omega;
-    pm.period = 2 * std::numbers::pi / omega;
-    pm.options = event_driven_options(spec);
-    return pm;
-  };
+  const ModelFamily family = speed_family(case_text(p, 1e-10, 1e-12));
   auto smaller_N = [&](double omega) {
     FullRubSet q = p;
     q.Omega = omega;

@@ -71,7 +71,7 @@ struct BranchPoint {
 /// A special point between two points of the branch.
 struct BranchSpecial {
   std::string kind;     ///< "fold", "period_doubling", "neimark_sacker", "events_change"
-  int after = 0;  ///< between points `after` and `after + 1` (or beyond the last, `after`)
+  int after = 0;        ///< between points `after` and `after + 1` (or beyond the last, `after`)
   double lambda = 0.0;  ///< located
   std::string how;      ///< how it was detected and located
 };
