@@ -107,30 +107,48 @@ PhaseSession::PhaseSession(const PhaseContext& ctx, const SessionSettings& s, Se
   c.atol = atol_.data();
   c.max_steps = s.max_steps;
   CvodeCallbacks cb;
+  const bool newton =
+      kind == SessionKind::Projected || (kind == SessionKind::Free && !c.fixed_point);
+  if (newton) {
+    // the structured Newton systems' workspaces (lsys_free, lsys_projected)
+    rhs_n_.setZero(n_);
+    dv_.setZero(n_);
+    M_.setZero(n_, n_);
+    dfdq_.setZero(n_, n_);
+    dfdv_.setZero(n_, n_);
+    dMa_.setZero(n_, n_);
+    f_.setZero(n_);
+    a_.setZero(n_);
+    // sized by a factorisation (Eigen's LDLT(n) leaves its info member uninitialised, and
+    // assigning that object reads it: UBSan's invalid enum load)
+    ldlt_.compute(Mat::Identity(n_, n_));
+    std::vector<int> border;
+    if (m_.spin_coordinate() >= 0) border.push_back(m_.spin_coordinate());
+    band_ = std::make_unique<BorderedBand>(n_, border);
+  }
   switch (kind) {
     case SessionKind::Free:
       cb.rhs = &PhaseSession::rhs_free;
-      if (!c.fixed_point) {
+      if (newton) {
         cb.lsys = &PhaseSession::lsys_free;
         cb.lsolve = &PhaseSession::lsolve_free;
-        S_.setZero(n_, n_);
-        rhs_n_.setZero(n_);
-        dv_.setZero(n_);
-        lu_.compute(Mat::Identity(n_, n_));  // (sized here: no allocation in the solves)
-        M_.setZero(n_, n_);
-        dfdq_.setZero(n_, n_);
-        dfdv_.setZero(n_, n_);
-        dMa_.setZero(n_, n_);
-        f_.setZero(n_);
-        a_.setZero(n_);
-        // sized by a factorisation (Eigen's LDLT(n) leaves its info member uninitialised, and
-        // assigning that object reads it: UBSan's invalid enum load)
-        ldlt_.compute(Mat::Identity(n_, n_));
       }
       break;
     case SessionKind::Projected:
       cb.rhs = &PhaseSession::rhs_projected;
       cb.proj = &PhaseSession::proj;
+      cb.lsys = &PhaseSession::lsys_projected;
+      cb.lsolve = &PhaseSession::lsolve_projected;
+      jac_eval_ = std::make_unique<PhaseEval>(m_, K_);
+      q_jac_.setZero(n_);
+      v_jac_.setZero(n_);
+      Wf_.setZero(n_, 2 * K_);
+      Ht_.setZero(n_, 2 * K_);
+      Y_.setZero(n_, 2 * K_);
+      E_.setZero(2 * K_, 2 * K_);
+      E_lu_.compute(E_);  // (sized here)
+      res_.setZero(2 * K_);
+      mu_.setZero(2 * K_);
       break;
     case SessionKind::Reduced: cb.rhs = &PhaseSession::rhs_reduced; break;
   }
@@ -248,18 +266,27 @@ int PhaseSession::rhs_free(double t, const double* y, double* yd, void* user) {
   return all_finite(a) ? 0 : 1;
 }
 
-// Free flight's Jacobian blocks at y: M, df/dv and df/dq - d(M a)/dq (in dfdq_), with M
-// factored (ldlt_) and a = M^{-1} f.
-void PhaseSession::free_jacobians(double t, const double* y) {
+// Free flight's Jacobian blocks at y (header); the band of S is detected from them.
+void PhaseSession::free_jacobians(double t, const double* y, const Vec* a) {
   const int n = n_;
   const CMap q(y, n), v(y + n, n);
   m_.mass_matrix(q, M_);
-  m_.smooth_forces(t, q, v, f_);
   m_.smooth_force_jacobians(t, q, v, dfdq_, dfdv_);
-  ldlt_.compute(M_);
-  a_ = ldlt_.solve(f_);
+  if (a) {
+    a_ = *a;
+  } else {
+    m_.smooth_forces(t, q, v, f_);
+    a_ = f_;
+    Eigen::Map<Mat> am(a_.data(), n, 1);
+    m_.solve_mass(q, am);
+  }
   m_.mass_matrix_product_jacobian(q, a_, dMa_);
   dfdq_ -= dMa_;
+  band_->reset_pattern();
+  band_->detect(M_);
+  band_->detect(dfdq_);
+  band_->detect(dfdv_);
+  band_->finish_pattern();
 }
 
 // Analytic Jacobian: d/dq (M^{-1} f) = M^{-1} (df/dq - d(M a)/dq), with a fixed.
@@ -267,6 +294,7 @@ int PhaseSession::jac_free(double t, const double* y, const double*, double* J, 
   auto* self = static_cast<PhaseSession*>(user);
   const int n = self->n_;
   self->free_jacobians(t, y);
+  self->ldlt_.compute(self->M_);
   // column-major N x N, as SUNDIALS' dense matrix; the rows of the works are left 0 (they feed
   // back into nothing, so Newton converges on them with the state)
   const int N = 2 * n + kNw;
@@ -282,28 +310,95 @@ int PhaseSession::jac_free(double t, const double* y, const double*, double* J, 
 // [0, 0, 0]] on (q, v, works) (the works' rows left 0 as in jac_free), A_q = M^-1 (df/dq -
 // d(M a)/dq), A_v = M^-1 df/dv: the first block row gives x_q = b_q + gamma x_v, and M times the
 // second, (M - gamma df/dv - gamma^2 (df/dq - d(M a)/dq)) x_v = M b_v + gamma (df/dq - d(M a)/dq)
-// b_q, one n x n factorisation instead of one of 2n + 3 (8x fewer operations), and no M^-1 J.
+// b_q, one n x n factorisation instead of one of 2n + 3 (8x fewer operations), and no M^-1 J;
+// banded with the spin as its border where the model's matrices are (bordered_band.hpp).
 int PhaseSession::lsys_free(double t, const double* y, double gamma, int jok, int* jcur,
                             void* user) {
   auto* self = static_cast<PhaseSession*>(user);
   if (!jok) self->free_jacobians(t, y);
   *jcur = jok ? 0 : 1;
   self->gamma_ = gamma;
-  self->S_ = self->M_;
-  self->S_.noalias() -= gamma * self->dfdv_;
-  self->S_.noalias() -= (gamma * gamma) * self->dfdq_;
-  self->lu_.compute(self->S_);
-  return all_finite(self->S_) ? 0 : 1;
+  return self->band_->factor(self->M_, -gamma, self->dfdv_, -gamma * gamma, self->dfdq_) ? 0 : 1;
+}
+
+// x_v of the first block row: S x_v = M b_v + gamma (df/dq - d(M a)/dq) b_q.
+void PhaseSession::newton_velocities(const double* b) {
+  const int n = n_;
+  rhs_n_.setZero();
+  band_->product(M_, 1.0, b + n, rhs_n_.data());
+  band_->product(dfdq_, gamma_, b, rhs_n_.data());
+  band_->solve(rhs_n_.data(), dv_.data());
 }
 
 int PhaseSession::lsolve_free(const double* b, double* x, void* user) {
   auto* self = static_cast<PhaseSession*>(user);
   const int n = self->n_;
-  const CMap bq(b, n), bv(b + n, n);
-  self->rhs_n_.noalias() = self->M_ * bv;
-  self->rhs_n_.noalias() += self->gamma_ * (self->dfdq_ * bq);
-  self->dv_ = self->lu_.solve(self->rhs_n_);
-  VMap(x, n) = bq + self->gamma_ * self->dv_;
+  self->newton_velocities(b);
+  VMap(x, n) = CMap(b, n) + self->gamma_ * self->dv_;
+  VMap(x + n, n) = self->dv_;
+  for (int i = 2 * n; i < 2 * n + kNw; ++i) x[i] = b[i];
+  return all_finite(self->dv_) ? 0 : 1;
+}
+
+int PhaseSession::lsys_projected(double t, const double* y, double gamma, int jok, int* jcur,
+                                 void* user) {
+  auto* self = static_cast<PhaseSession*>(user);
+  const int n = self->n_;
+  const PhaseContext& ctx = self->ctx_;
+  if (!jok) {
+    self->q_jac_ = CMap(y, n);
+    self->v_jac_ = CMap(y + n, n);
+    PhaseEval& e = *self->jac_eval_;
+    if (!e.dynamics(t, self->q_jac_, self->v_jac_, ctx.modes, ctx.laws))
+      return 1;  // recoverable: CVODE retries with a smaller step
+    self->free_jacobians(t, y, &e.a());
+    int mc = 0;
+    for (int k = 0; k < self->K_; ++k) {
+      const Phase p = ctx.modes[k];
+      if (!closed(p)) continue;
+      const ContactKinematics& c = e.c(k);
+      self->Ht_.col(mc) = c.W_N;
+      self->Wf_.col(mc) = c.W_N;
+      if (slipping(p)) self->Wf_.col(mc) -= (ctx.law(k).mu * slip_sign(p)) * c.W_T;
+      ++mc;
+      if (p == Phase::Stick) {
+        self->Ht_.col(mc) = c.W_T;
+        self->Wf_.col(mc) = c.W_T;
+        ++mc;
+      }
+    }
+    self->mc_ = mc;
+  }
+  *jcur = jok ? 0 : 1;
+  self->gamma_ = gamma;
+  if (!self->band_->factor(self->M_, -gamma, self->dfdv_, -gamma * gamma, self->dfdq_)) return 1;
+  const int mc = self->mc_;
+  if (mc == 0) return 0;
+  for (int j = 0; j < mc; ++j) self->band_->solve(self->Wf_.col(j).data(), self->Y_.col(j).data());
+  self->E_.resize(mc, mc);
+  self->E_.noalias() = self->Ht_.leftCols(mc).transpose() * self->Y_.leftCols(mc);
+  if (!self->E_.allFinite()) return 1;
+  // rank-revealing: redundant constraints (a rod's two ends on one line) make E singular but
+  // their right-hand sides consistent, and any solution gives the same x_v (as the contact
+  // problem's minimum-norm forces give the same motion)
+  self->E_lu_.compute(self->E_);
+  return self->E_lu_.rank() > 0 ? 0 : 1;
+}
+
+int PhaseSession::lsolve_projected(const double* b, double* x, void* user) {
+  auto* self = static_cast<PhaseSession*>(user);
+  const int n = self->n_;
+  const int mc = self->mc_;
+  self->newton_velocities(b);
+  if (mc > 0) {
+    // mu = (H S^-1 W_f)^-1 (H b_v - H x0), x_v = x0 + S^-1 W_f mu
+    const CMap bv(b + n, n);
+    self->res_.resize(mc);
+    for (int j = 0; j < mc; ++j) self->res_[j] = self->Ht_.col(j).dot(bv - self->dv_);
+    self->mu_ = self->E_lu_.solve(self->res_);
+    self->dv_.noalias() += self->Y_.leftCols(mc) * self->mu_;
+  }
+  VMap(x, n) = CMap(b, n) + self->gamma_ * self->dv_;
   VMap(x + n, n) = self->dv_;
   for (int i = 2 * n; i < 2 * n + kNw; ++i) x[i] = b[i];
   return all_finite(self->dv_) ? 0 : 1;

@@ -6,7 +6,8 @@
 //              or BDF with the analytic Jacobian, its Newton systems reduced to n x n (lsys_free)
 //   Projected  the closed contacts' index-reduced DAE in (q, v): BDF, CVODE's projection after
 //              every step (positions onto d_N,k = 0, velocities mass-weighted onto v_N,k = 0 and
-//              v_t,k = 0 in stick)
+//              v_t,k = 0 in stick); its Newton systems free flight's, bordered by the closed
+//              contacts' constraints (lsys_projected)
 //   Reduced    a contact phase in minimal coordinates (phase_chart.hpp) of one dimension: every
 //              mode tuple whose chart has it; the constraints hold by construction
 // A session state is the mechanical part ((q, v) or (p, p')) followed by the kNw works of the
@@ -22,6 +23,7 @@
 #include <span>
 #include <vector>
 
+#include "bordered_band.hpp"
 #include "contact_modes.hpp"
 #include "cvode_session.hpp"
 #include "phase_chart.hpp"
@@ -109,6 +111,20 @@ class PhaseSession {
   static int jac_free(double t, const double* y, const double* yd, double* J, void* user);
   static int lsys_free(double t, const double* y, double gamma, int jok, int* jcur, void* user);
   static int lsolve_free(const double* b, double* x, void* user);
+  // The Projected session's Newton systems (BDF), user = this session. The constrained
+  // acceleration solves M a = f + W_f lambda, H a + wdot = 0 (W_f: the closed contacts' force
+  // directions, W_N - mu s W_T in slip, W_N and W_T in stick; H: their constraint rows W_N^T,
+  // and W_T^T in stick). Its Jacobian with W_f, H and wdot held fixed (their derivatives act on
+  // the contact coordinates only, by lambda / g0 and v / g0: below 1e-3 of M's entries at the
+  // steps these phases take) turns the Newton system into free flight's S bordered by them,
+  //   [S  -W_f] [x_v]   [M b_v + gamma (df/dq - d(M a)/dq) b_q]
+  //   [H    0 ] [mu ] = [H b_v                               ],   x_q = b_q + gamma x_v,
+  // with d(M a)/dq at the constrained a: S factored once, then a Schur complement of at most
+  // 2K rows. CVODE's Newton iteration converges on the exact residual; the Jacobian only sets
+  // its rate.
+  static int lsys_projected(double t, const double* y, double gamma, int jok, int* jcur,
+                            void* user);
+  static int lsolve_projected(const double* b, double* x, void* user);
   /// The unscaled value of a witness after evaluate() or evaluate_witnesses().
   double witness_value(const WitnessRef& w, double t, const Vec& q, const Vec& v) const {
     return ctx_.witness_value(w, query_, t, q, v);
@@ -116,7 +132,11 @@ class PhaseSession {
 
  private:
   void to_full(const double* y, Vec& q, Vec& v) const;
-  void free_jacobians(double t, const double* y);
+  /// Free flight's Jacobian blocks at y: M, df/dv and df/dq - d(M a)/dq (in dfdq_) with a
+  /// the given acceleration (null: free flight's M^-1 f, into a_), and their band (band_).
+  void free_jacobians(double t, const double* y, const Vec* a = nullptr);
+  /// dv_ = S^-1 (M b_v + gamma (df/dq - d(M a)/dq) b_q), b = (b_q, b_v, ...).
+  void newton_velocities(const double* b);
   void powers(double t, VecIn q, VecIn v, const PhaseEval& e, double* w) const;
   static int rhs_free(double t, const double* y, double* yd, void* user);
   static int rhs_projected(double t, const double* y, double* yd, void* user);
@@ -142,11 +162,20 @@ class PhaseSession {
   mutable std::vector<double> scratch_;
   // free flight's Jacobian (BDF): M, df/dq - d(M a)/dq, df/dv at its state, and the Newton
   // system reduced to the n x n S = M - gamma df/dv - gamma^2 (df/dq - d(M a)/dq) (lsys_free)
-  Mat M_, dfdq_, dfdv_, dMa_, S_;
+  Mat M_, dfdq_, dfdv_, dMa_;
   Vec f_, a_, rhs_n_, dv_;
   double gamma_ = 0.0;
-  Eigen::LDLT<Mat> ldlt_;
-  Eigen::PartialPivLU<Mat> lu_;
+  Eigen::LDLT<Mat> ldlt_;               ///< M's, for the dense reference (jac_free)
+  std::unique_ptr<BorderedBand> band_;  ///< S, banded with the spin as its border
+  // the Projected session's constraints at its Jacobian's state: W_f, H^T (n x mc), S^-1 W_f,
+  // and the Schur complement H S^-1 W_f (lsys_projected)
+  std::unique_ptr<PhaseEval> jac_eval_;
+  Vec q_jac_, v_jac_;
+  Mat Wf_, Ht_, Y_;
+  int mc_ = 0;
+  SmallMat E_;
+  Eigen::FullPivLU<SmallMat> E_lu_;
+  SmallVec res_, mu_;
   std::unique_ptr<CvodeSession> session_;
 };
 
