@@ -23,7 +23,7 @@
 #include <span>
 #include <vector>
 
-#include "bordered_band.hpp"
+#include "rubdyn/core/bordered_band.hpp"
 #include "contact_modes.hpp"
 #include "cvode_session.hpp"
 #include "phase_chart.hpp"

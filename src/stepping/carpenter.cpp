@@ -73,7 +73,7 @@ class Carpenter final : public Stepper {
         o_(o),
         qn_(o.scheme == FixedStepScheme::CarpQN),
         spin_(m.spin_coordinate()),
-        newton_(n_, 30),
+        newton_(n_, 30, m.spin_coordinate()),
         q_(V::Zero(n_)),
         v_(V::Zero(n_)),
         dq_prev_(V::Zero(n_)),

@@ -77,7 +77,7 @@ class MoreauJean final : public Stepper {
         o_(o),
         project_(o.scheme == FixedStepScheme::MoreauJeanProjected),
         rheonomic_(m.rheonomic()),
-        newton_(n_, 50),
+        newton_(n_, 50, m.spin_coordinate()),
         q_(V::Zero(n_)),
         v_(V::Zero(n_)),
         v_prev_(V::Zero(n_)),

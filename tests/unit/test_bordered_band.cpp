@@ -1,4 +1,4 @@
-// The bordered band LU of the BDF Newton systems (hybrid/bordered_band.*): solves and products
+// The bordered band LU of the BDF Newton systems (core/bordered_band.*): solves and products
 // against Eigen's dense LU and products on the same matrices, banded with a border, with row
 // interchanges forced, and dense (the fall-back).
 #include <algorithm>
@@ -6,7 +6,7 @@
 #include <random>
 #include <vector>
 
-#include "hybrid/bordered_band.hpp"
+#include "rubdyn/core/bordered_band.hpp"
 
 using namespace rubdyn;
 using namespace rubdyn::detail;

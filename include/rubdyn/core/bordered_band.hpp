@@ -1,5 +1,6 @@
 #pragma once
-// Linear algebra of the BDF Newton systems of wide models (phase_session.hpp): an N x N matrix
+// Linear algebra of the Newton systems of wide models (the event-driven engine's BDF phases,
+// the fixed-step schemes' iteration matrices): an N x N matrix
 // S whose coordinates split into a banded set and a few dense "border" ones (the spin: its row
 // and column couple every coordinate through the gyroscopic and unbalance terms). A
 // finite-element rotor with 4 coordinates per node has half-bandwidths of 7 whatever its size,

@@ -1,4 +1,4 @@
-#include "bordered_band.hpp"
+#include "rubdyn/core/bordered_band.hpp"
 
 #include <algorithm>
 #include <cmath>
