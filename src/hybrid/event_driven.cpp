@@ -77,9 +77,23 @@ class Engine {
     const auto how = [](MultistepMethod m) {
       return m == MultistepMethod::Auto ? "auto" : "given";
     };
+    // the contact phases' formulation (ContactFormulation::Auto): minimal coordinates unless
+    // BDF integrates them and the Newton systems are banded (the projected DAE's are solved
+    // banded, minimal coordinates' densely)
+    formulation_ = opt_.contact_phases;
+    std::string formulation;
+    if (formulation_ == ContactFormulation::Auto) {
+      formulation_ = ContactFormulation::Reduced;
+      if (!contact_adams_) {
+        const NewtonStructure ns = assess_newton_structure(m_, init.t, init.q, init.v);
+        if (ns.project()) formulation_ = ContactFormulation::Projection;
+        formulation = fmt::format("\"formulation\": \"auto: {} ({})\", ",
+                                  ns.project() ? "projection" : "reduced", ns.reason());
+      }
+    }
     return fmt::format("\"methods\": \"free flight {}, contact phases {}\", ", how(opt_.method),
                        how(opt_.contact_method)) +
-           (a ? fmt::format("\"stiffness\": \"{}\", ", a->reason()) : std::string());
+           (a ? fmt::format("\"stiffness\": \"{}\", ", a->reason()) : std::string()) + formulation;
   }
 
   const SwitchTolerances& tol(int k) const { return ctx_.tl(k); }
@@ -104,7 +118,7 @@ class Engine {
     // minimal coordinates (phase_chart.hpp): one session per number r of coordinates removed
     // (1 .. 2K), built here so that no switch allocates; the projected DAE where the chart does
     // not apply
-    if (opt_.contact_phases == ContactFormulation::Reduced) chart_ = make_phase_chart(m_);
+    if (formulation_ == ContactFormulation::Reduced) chart_ = make_phase_chart(m_);
     if (chart_) {
       SessionSettings sr = s;
       sr.adams = contact_adams_;
@@ -501,6 +515,7 @@ class Engine {
   Phase books_ = Phase::Free;
   bool omega_witness_ = false;
   bool adams_ = true, contact_adams_ = true;  // the families chosen (choose_methods)
+  ContactFormulation formulation_ = ContactFormulation::Reduced;  // (choose_methods)
   double t_end_ = 0, phase_start_ = 0, t_restart_ = 0;
   /// The last step the integrator took (the next order's scale); before any step, the first
   /// step's horizon.

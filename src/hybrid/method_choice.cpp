@@ -7,7 +7,39 @@
 #include <cmath>
 #include <vector>
 
+#include "rubdyn/core/bordered_band.hpp"
+
 namespace rubdyn {
+
+std::string NewtonStructure::reason() const {
+  return fmt::format(
+      "Newton systems of {} coordinates, half-bandwidths {}/{} besides the spin: {}{}", n, kl, ku,
+      banded ? "banded" : "dense",
+      banded && n < kWideModel ? fmt::format(", fewer than {} coordinates", kWideModel) : "");
+}
+
+NewtonStructure assess_newton_structure(const LagrangianModel& model, double t, const Vec& q,
+                                        const Vec& v) {
+  const int n = model.num_dofs();
+  Mat M(n, n), dfdq(n, n), dfdv(n, n), dMa(n, n);
+  model.mass_matrix(q, M);
+  model.smooth_force_jacobians(t, q, v, dfdq, dfdv);
+  // d(M a)/dq's pattern for a generic a (every entry of a nonzero)
+  const Vec ones = Vec::Ones(n);
+  model.mass_matrix_product_jacobian(q, ones, dMa);
+  std::vector<int> border;
+  if (model.spin_coordinate() >= 0) border.push_back(model.spin_coordinate());
+  detail::BorderedBand band(n, border);
+  band.reset_pattern();
+  for (const Mat* A : {&M, &dfdq, &dfdv, &dMa}) band.detect(*A);
+  band.finish_pattern();
+  NewtonStructure s;
+  s.n = n;
+  s.kl = band.kl();
+  s.ku = band.ku();
+  s.banded = band.banded();
+  return s;
+}
 
 std::string StiffnessAssessment::reason() const {
   if (omega_min <= 0.0)

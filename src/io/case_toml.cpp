@@ -1769,9 +1769,10 @@ class Loader {
       issue("solver.method", at("solver.method"), "\"" + so.method + "\"",
             "must be auto, bdf or adams");
     }
-    if (so.contact_phases != "reduced" && so.contact_phases != "projection") {
+    if (so.contact_phases != "auto" && so.contact_phases != "reduced" &&
+        so.contact_phases != "projection") {
       issue("solver.contact_phases", at("solver.contact_phases"), "\"" + so.contact_phases + "\"",
-            "must be reduced or projection");
+            "must be auto, reduced or projection");
     }
     if (so.contact_method != "auto" && so.contact_method != "bdf" && so.contact_method != "adams") {
       issue("solver.contact_method", at("solver.contact_method"), "\"" + so.contact_method + "\"",

@@ -67,7 +67,8 @@ EventDrivenOptions event_driven_options(const CaseSpec& spec) {
   opt.atol = spec.solver.atol;
   opt.method = multistep(spec.solver.method);
   opt.contact_phases = spec.solver.contact_phases == "projection" ? ContactFormulation::Projection
-                                                                  : ContactFormulation::Reduced;
+                       : spec.solver.contact_phases == "reduced"  ? ContactFormulation::Reduced
+                                                                  : ContactFormulation::Auto;
   opt.contact_method = multistep(spec.solver.contact_method);
   opt.output_dt = spec.output.dt;
   opt.omega_lim = spec.run.omega_lim;

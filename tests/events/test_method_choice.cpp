@@ -1,12 +1,16 @@
 // The event solver's multistep method chosen by the model's stiffness (solver.method = "auto",
 // hybrid/method_choice.hpp): the time scales against the Jeffcott rotor's closed forms, the
-// verdict on each side of the threshold, and the run that follows it.
+// verdict on each side of the threshold, and the run that follows it; the contact phases'
+// formulation chosen by the Newton systems' structure (solver.contact_phases = "auto").
 #include <catch2/catch.hpp>
 #include <cmath>
 
 #include "rubdyn/hybrid/event_driven.hpp"
 #include "rubdyn/hybrid/method_choice.hpp"
+#include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/model/jeffcott_model.hpp"
+#include "rubdyn/model/rotor_stator_model.hpp"
 
 using namespace rubdyn;
 
@@ -106,4 +110,52 @@ TEST_CASE("Method choice: auto runs Adams on a soft model bit for bit, BDF on a 
     // the reason for the choice: Adams' step is bounded by the ring's 3e5 rad/s
     CHECK(a.summary.steps < c.summary.steps);
   }
+}
+
+TEST_CASE("Contact formulation: auto projects a banded stiff FE rotor, charts the others",
+          "[events][method]") {
+  // cases/fe-two-seal.toml: a 12-element shaft (52 coordinates, 4 per node), the spin, two
+  // rings: half-bandwidth 7 (a node's 4 coordinates and its neighbour's) besides the spin
+  const CaseSpec fe = load_case(std::string(RUBDYN_SOURCE_DIR) + "/cases/fe-two-seal.toml", {});
+  const auto fe_model = build_model(fe);
+  const MechanicalState fe_init = initial_state(fe);
+  const NewtonStructure ns = assess_newton_structure(*fe_model, fe_init.t, fe_init.q, fe_init.v);
+  INFO(ns.reason());
+  CHECK(ns.n == 57);
+  CHECK(ns.kl == 7);
+  CHECK(ns.ku == 7);
+  CHECK(ns.banded);
+  // the paper's rotor: 7 coordinates, dense by the flop count
+  const RotorStatorModel rigid(RotorStatorParams{});
+  const MechanicalState rs(rigid.num_dofs());
+  CHECK_FALSE(assess_newton_structure(rigid, 0.0, rs.q, rs.v).banded);
+
+  const auto options = [](const LagrangianModel& m, const MechanicalState& s,
+                          ContactFormulation f) {
+    EventDrivenOptions opt;
+    opt.rtol = 1e-8;
+    opt.atol = 1e-13;
+    opt.contact_phases = f;
+    MemorySink sink;
+    run_event_driven(m, s, 1e-3, opt, sink);
+    REQUIRE(sink.summary.complete());
+    return sink.summary.options;
+  };
+  const std::string fe_auto = options(*fe_model, fe_init, ContactFormulation::Auto);
+  CHECK(fe_auto.find("\"contact_phases\": \"bdf+projection\"") != std::string::npos);
+  CHECK(fe_auto.find("\"formulation\": \"auto: projection (Newton systems of 57") !=
+        std::string::npos);
+  // given, it is used as given
+  CHECK(options(*fe_model, fe_init, ContactFormulation::Reduced).find("reduced+bdf") !=
+        std::string::npos);
+  // a stiff model with dense Newton systems keeps minimal coordinates (BDF in them)
+  const JeffcottModel stiff(scene(1000.0 * 300.0));
+  const std::string j = options(stiff, spinning(stiff), ContactFormulation::Auto);
+  CHECK(j.find("reduced+bdf") != std::string::npos);
+  CHECK(j.find("auto: reduced") != std::string::npos);
+  // a soft one (Adams in contact) is not assessed: minimal coordinates, as before
+  const JeffcottModel soft(scene(2000.0));
+  const std::string k = options(soft, spinning(soft), ContactFormulation::Auto);
+  CHECK(k.find("reduced+adams") != std::string::npos);
+  CHECK(k.find("formulation") == std::string::npos);
 }

@@ -82,8 +82,13 @@ enum class ContactFormulation {
   /// projection formulation (the summary's options say which one ran).
   Reduced,
   /// The index-reduced DAE in the full coordinates, CVODE-BDF with projection after every step
-  /// (an in-house cross-check of the reduced formulation).
-  Projection
+  /// (an in-house cross-check of the reduced formulation, and the formulation of wide models).
+  Projection,
+  /// Reduced, unless the contact phases are integrated by BDF and the model's Newton systems are
+  /// banded and wide (a finite-element rotor: hybrid/method_choice.hpp, NewtonStructure): then
+  /// Projection, whose Newton systems are solved banded in O(n w^2) where minimal coordinates'
+  /// are dense (2n + 3 difference quotients and an O(n^3) factorisation per Jacobian).
+  Auto
 };
 
 /// A CVODE multistep family, or the choice left to the model's stiffness (hybrid/method_choice.hpp:
@@ -100,7 +105,7 @@ struct EventDrivenOptions : RunControls {
   /// 3.6e-11 m vs 2.1e-10 m; BDF where it is (a finite-element shaft: 5016 steps vs Adams'
   /// 289k, docs/fe-rotors.md). Auto decides by the model (summary.json says which and why).
   MultistepMethod method = MultistepMethod::Auto;
-  ContactFormulation contact_phases = ContactFormulation::Reduced;
+  ContactFormulation contact_phases = ContactFormulation::Auto;
   MultistepMethod contact_method = MultistepMethod::Auto;  ///< reduced contact phases
   /// Adams phases solve their implicit corrector by fixed-point iteration (no Jacobian, no
   /// linear algebra) instead of Newton with a difference-quotient Jacobian.

@@ -44,9 +44,11 @@ struct SolverOptions {
   /// free flight: auto | adams | bdf (CVODE multistep family; auto: bdf when the model is stiff,
   /// hybrid/method_choice.hpp)
   std::string method = "auto";
-  std::string contact_phases = "reduced";  ///< reduced (minimal coordinates) | projection (DAE)
-  std::string contact_method = "auto";     ///< reduced contact phases: auto | adams | bdf
-  double max_events_per_second = 1e6;      ///< chattering guard: events per simulated second
+  /// auto (reduced, or projection for a banded stiff model) | reduced (minimal coordinates) |
+  /// projection (DAE)
+  std::string contact_phases = "auto";
+  std::string contact_method = "auto";  ///< reduced contact phases: auto | adams | bdf
+  double max_events_per_second = 1e6;   ///< chattering guard: events per simulated second
   // fixed-step
   double h = 1e-6;                  ///< time step [s]
   int itmax = 20;                   ///< carp-qn: max quasi-Newton iterations per step
