@@ -30,7 +30,7 @@
 // row i of L starts where row i of M does), so the triangular solves with L and L^T cost
 // O(n w) too; b (a row of G per entry) and u (two envelope solves) are computed per call,
 // in thread-local scratch vectors (a model holds no mutable state and may serve several
-// threads; nothing is allocated after a thread's first call).
+// threads; nothing is allocated after a thread's first call of its largest model).
 // s > 0 is required of an initial state (case validation); a state where it is not (M_full
 // not positive definite: |q| far beyond the linear model's range) makes the solve return NaN,
 // which the solvers end as a non-finite state (Termination::NonFinite).
