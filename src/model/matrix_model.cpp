@@ -8,6 +8,59 @@
 
 namespace rubdyn {
 
+namespace {
+
+/// b and u of the spin column, one pair per thread: a model holds no mutable state and may
+/// serve several runs at once. They only grow (head(n) is used), so that models of several
+/// sizes on one thread do not reallocate in turn; after a thread's first call of its largest
+/// model nothing is allocated.
+struct SpinScratch {
+  Vec b, u;
+};
+
+SpinScratch& spin_scratch(int n) {
+  thread_local SpinScratch s;
+  if (s.b.size() < n) {
+    s.b.setZero(n);
+    s.u.setZero(n);
+  }
+  return s;
+}
+
+}  // namespace
+
+MatrixModel::Envelope::Envelope(const Mat& A) {
+  const auto n = A.rows();
+  lo.assign(static_cast<std::size_t>(n), 0);
+  len.assign(static_cast<std::size_t>(n), 0);
+  off.assign(static_cast<std::size_t>(n), 0);
+  Eigen::Index total = 0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    Eigen::Index first = -1, last = -1;
+    for (Eigen::Index j = 0; j < A.cols(); ++j) {
+      if (A(i, j) == 0.0) continue;
+      if (first < 0) first = j;
+      last = j;
+    }
+    const auto k = static_cast<std::size_t>(i);
+    lo[k] = first < 0 ? 0 : first;
+    len[k] = first < 0 ? 0 : last - first + 1;
+    off[k] = total;
+    total += len[k];
+  }
+  val.resize(total);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    for (Eigen::Index j = 0; j < len[k]; ++j) val[off[k] + j] = A(i, lo[k] + j);
+  }
+}
+
+double MatrixModel::Envelope::dot(int i, const double* x) const {
+  const auto k = static_cast<std::size_t>(i);
+  return Eigen::Map<const Vec>(val.data() + off[k], len[k])
+      .dot(Eigen::Map<const Vec>(x + lo[k], len[k]));
+}
+
 std::vector<Coordinate> matrix_model_coordinates(int n, const std::vector<std::string>& names,
                                                  const std::vector<MatrixNode>& nodes) {
   using R = CoordinateRole;
@@ -120,14 +173,17 @@ MatrixModel::MatrixModel(const MatrixParams& p)
   coords_ = matrix_model_coordinates(n_, r.names, list);
   Eigen::LLT<Mat> llt(r.M);
   RUBDYN_DEMAND(llt.info() == Eigen::Success);
-  L_ = llt.matrixL();
-  MinvG_ = llt.solve(r.G);
-  mx_ = llt.solve(Vec::Unit(n_, ix_));
-  my_ = llt.solve(Vec::Unit(n_, iy_));
-  MinvG_.transposeInPlace();  // (row i of M^-1 G as a contiguous column)
-  Gt_ = r.G.transpose();
-  Ct_ = r.C.transpose();
-  Kt_ = r.K.transpose();
+  // L's rows are read from the factor itself: the entries left of a row's first nonzero of M
+  // are exact zeros of L (no fill outside the envelope), so this is M's envelope
+  Le_ = Envelope(Mat(llt.matrixL()));
+  for (int i = 0; i < n_; ++i) {  // row i ends at its (positive) diagonal
+    const auto k = static_cast<std::size_t>(i);
+    RUBDYN_DEMAND(Le_.len[k] >= 1 && Le_.lo[k] + Le_.len[k] - 1 == i);
+  }
+  Me_ = Envelope(r.M.transpose());  // (M's columns, as the products used before: M symmetric)
+  Ce_ = Envelope(r.C);
+  Ke_ = Envelope(r.K);
+  Ge_ = Envelope(r.G);
   const int lo = std::min(ix_, iy_);
   slot_ = lo;
   for (int i = 0; i < n_; ++i)
@@ -146,23 +202,46 @@ void MatrixModel::unbalance_terms(VecIn q, double& ubs, double& ubc) const {
 }
 
 double MatrixModel::b(int i, VecIn q, double ubs, double ubc) const {
-  double bi = 0.5 * Gt_.col(i).dot(q.head(n_));
+  double bi = 0.5 * Ge_.dot(i, q.data());
   if (i == ix_) bi -= ubs;
   if (i == iy_) bi += ubc;
   return bi;
 }
 
-double MatrixModel::u(int i, VecIn q, double ubs, double ubc) const {
-  // M^-1 b = 1/2 (M^-1 G) q + M^-1 (-u_b sin psi e_x + u_b cos psi e_y)
-  return 0.5 * MinvG_.col(i).dot(q.head(n_)) - ubs * mx_[i] + ubc * my_[i];
+void MatrixModel::solve_rotor_mass(double* x) const {
+  // L z = x by rows (z_i = (x_i - L_i,lo..i-1 . z) / L_ii), then L^T y = z by the columns of
+  // L^T, i.e. the same rows of L (y_i = z_i / L_ii, then z_lo..i-1 -= y_i L_i,lo..i-1): both
+  // touch the envelope only
+  const Envelope& L = Le_;
+  for (int i = 0; i < n_; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const Eigen::Index m = L.len[k] - 1;  // (the diagonal is the row's last entry)
+    const double* row = L.val.data() + L.off[k];
+    const double s = Eigen::Map<const Vec>(row, m).dot(Eigen::Map<const Vec>(x + L.lo[k], m));
+    x[i] = (x[i] - s) / row[m];
+  }
+  for (int i = n_ - 1; i >= 0; --i) {
+    const auto k = static_cast<std::size_t>(i);
+    const Eigen::Index m = L.len[k] - 1;
+    const double* row = L.val.data() + L.off[k];
+    x[i] /= row[m];
+    Eigen::Map<Vec>(x + L.lo[k], m) -= x[i] * Eigen::Map<const Vec>(row, m);
+  }
+}
+
+double MatrixModel::spin_column(VecIn q, double ubs, double ubc, double* bq, double* u) const {
+  for (int i = 0; i < n_; ++i) u[i] = bq[i] = b(i, q, ubs, ubc);
+  solve_rotor_mass(u);
+  double s = p_.rotor.Jp;
+  for (int i = 0; i < n_; ++i) s -= bq[i] * u[i];
+  return s;
 }
 
 double MatrixModel::schur(VecIn q) const {
   double ubs, ubc;
   unbalance_terms(q, ubs, ubc);
-  double s = p_.rotor.Jp;
-  for (int i = 0; i < n_; ++i) s -= b(i, q, ubs, ubc) * u(i, q, ubs, ubc);
-  return s;
+  SpinScratch& w = spin_scratch(n_);
+  return spin_column(q, ubs, ubc, w.b.data(), w.u.data());
 }
 
 void MatrixModel::mass_matrix(VecIn q, MatOut M) const {
@@ -182,7 +261,7 @@ void MatrixModel::mass_product(VecIn q, VecIn x, VecOut y) const {
   double yth = p_.rotor.Jp * x[th_];
   for (int i = 0; i < n_; ++i) {
     const double bi = b(i, q, ubs, ubc);
-    y[i] = p_.rotor.M.col(i).dot(x.head(n_)) + bi * x[th_];  // (M symmetric)
+    y[i] = Me_.dot(i, x.data()) + bi * x[th_];
     yth += bi * x[i];
   }
   y[th_] = yth;
@@ -194,13 +273,14 @@ void MatrixModel::mass_product(VecIn q, VecIn x, VecOut y) const {
 }
 
 void MatrixModel::solve_mass(VecIn q, MatOut B) const {
-  // Schur complement on theta (header); u_i and b_i are recomputed where needed (n^2 flops
-  // each pass) rather than kept in a workspace: a model holds no mutable state.
+  // Schur complement on theta (header): b and u once per call, then per right-hand side
+  // two envelope solves and two products with b and u (O(n w) each)
   double ubs, ubc;
   unbalance_terms(q, ubs, ubc);
-  const double s = schur(q);
+  SpinScratch& w = spin_scratch(n_);
+  const auto bq = w.b.head(n_), u = w.u.head(n_);
+  const double s = spin_column(q, ubs, ubc, w.b.data(), w.u.data());
   const bool ok = s > 0.0;  // (NaN: not ok)
-  const auto L = L_.triangularView<Eigen::Lower>();
   for (Eigen::Index j = 0; j < B.cols(); ++j) {
     auto r = B.col(j);
     if (!ok) {  // M_full not positive definite here: no solution (the solvers end the run)
@@ -208,12 +288,9 @@ void MatrixModel::solve_mass(VecIn q, MatOut B) const {
       continue;
     }
     auto z = r.head(n_);
-    L.solveInPlace(z);
-    L.adjoint().solveInPlace(z);
-    double bz = 0.0;
-    for (int i = 0; i < n_; ++i) bz += b(i, q, ubs, ubc) * z[i];
-    const double th = (r[th_] - bz) / s;
-    for (int i = 0; i < n_; ++i) z[i] -= u(i, q, ubs, ubc) * th;
+    solve_rotor_mass(z.data());
+    const double th = (r[th_] - bq.dot(z)) / s;
+    z -= th * u;
     r[th_] = th;
     for (const Node& nd : nodes_) {
       if (!nd.sprung()) continue;
@@ -243,8 +320,7 @@ void MatrixModel::smooth_forces(double /*t*/, VecIn q, VecIn v, VecOut f) const 
   const auto& L = p_.loads;
   const double om = v[th_];
   for (int i = 0; i < n_; ++i)
-    f[i] = p_.rotor.f0[i] - Ct_.col(i).dot(v.head(n_)) - Kt_.col(i).dot(q.head(n_)) -
-           om * Gt_.col(i).dot(v.head(n_));
+    f[i] = p_.rotor.f0[i] - Ce_.dot(i, v.data()) - Ke_.dot(i, q.data()) - om * Ge_.dot(i, v.data());
   f[th_] = L.drive_torque(om);
   if (L.unbalance != 0.0) {
     double ubs, ubc;
@@ -269,7 +345,7 @@ void MatrixModel::smooth_force_jacobians(double /*t*/, VecIn q, VecIn v, MatOut 
   dfdv.setZero();
   dfdq.topLeftCorner(n_, n_) = -p_.rotor.K;
   dfdv.topLeftCorner(n_, n_) = -p_.rotor.C - om * p_.rotor.G;
-  for (int i = 0; i < n_; ++i) dfdv(i, th_) = -Gt_.col(i).dot(v.head(n_));
+  for (int i = 0; i < n_; ++i) dfdv(i, th_) = -Ge_.dot(i, v.data());
   dfdv(th_, th_) = L.drive_torque_slope();
   if (L.unbalance != 0.0) {
     double ubs, ubc;
@@ -307,8 +383,7 @@ double MatrixModel::kinetic_energy(double /*t*/, VecIn q, VecIn v) const {
   unbalance_terms(q, ubs, ubc);
   const double om = v[th_];
   double T = p_.rotor.Jp * om * om;
-  for (int i = 0; i < n_; ++i)
-    T += v[i] * (p_.rotor.M.col(i).dot(v.head(n_)) + 2.0 * om * b(i, q, ubs, ubc));
+  for (int i = 0; i < n_; ++i) T += v[i] * (Me_.dot(i, v.data()) + 2.0 * om * b(i, q, ubs, ubc));
   for (const Node& nd : nodes_)
     if (nd.sprung()) T += nd.stator.mass * (v[nd.xs] * v[nd.xs] + v[nd.ys] * v[nd.ys]);
   return 0.5 * T;
@@ -317,7 +392,7 @@ double MatrixModel::kinetic_energy(double /*t*/, VecIn q, VecIn v) const {
 double MatrixModel::potential_energy(double /*t*/, VecIn q) const {
   const auto& L = p_.loads;
   double V = 0.0;
-  for (int i = 0; i < n_; ++i) V += q[i] * (0.5 * Kt_.col(i).dot(q.head(n_)) - p_.rotor.f0[i]);
+  for (int i = 0; i < n_; ++i) V += q[i] * (0.5 * Ke_.dot(i, q.data()) - p_.rotor.f0[i]);
   if (L.unbalance != 0.0) V += L.gravity * L.unbalance * std::sin(q[th_] + L.unbalance_phase);
   for (const Node& nd : nodes_)
     if (nd.sprung())
@@ -330,7 +405,7 @@ SmoothPower MatrixModel::smooth_power(double /*t*/, VecIn /*q*/, VecIn v) const 
   SmoothPower p;
   p.external = p_.loads.drive_torque(v[th_]) * v[th_];
   double d = 0.0;
-  for (int i = 0; i < n_; ++i) d -= v[i] * Ct_.col(i).dot(v.head(n_));
+  for (int i = 0; i < n_; ++i) d -= v[i] * Ce_.dot(i, v.data());
   for (const Node& nd : nodes_)
     if (nd.sprung()) d -= nd.stator.c * (v[nd.xs] * v[nd.xs] + v[nd.ys] * v[nd.ys]);
   p.damping = d;

@@ -18,9 +18,19 @@
 // The paper's rigid rotor is the case q = (x_b, y_b, x_r, y_r), node (x_r, y_r), G = H (...)
 // (rotor_stator_model.hpp), f0 its weight, no stator weight (loads.gravity = 0).
 //
-// Structured mass solve: M is factored once (LLT) and M^-1 G, M^-1 e_x, M^-1 e_y are kept, so
-// that u = M^-1 b costs n^2 flops; the Schur complement s = Jp - b.u on theta, then
+// Structured mass solve: M is factored once (LLT); per solve u = M^-1 b by the factor, the Schur
+// complement s = Jp - b.u on theta, then for each right-hand side
 //   theta'' = (r_theta - b.M^-1 r_q) / s,  q'' = M^-1 r_q - u theta''.
+//
+// Banded matrices (finite-element rotors: 4 coordinates per node, half-bandwidth 7): every
+// per-evaluation service costs O(n w), w the bandwidth, instead of O(n^2). Each of M, C, K, G
+// and the factor L is kept by its rows, each row over the columns from its first to its last
+// nonzero (Envelope, detected from the matrices: a dense matrix has full rows), and every
+// product is restricted to them. The Cholesky factor keeps M's envelope (no fill outside it:
+// row i of L starts where row i of M does), so the triangular solves with L and L^T cost
+// O(n w) too; b (a row of G per entry) and u (two envelope solves) are computed per call,
+// in thread-local scratch vectors (a model holds no mutable state and may serve several
+// threads; nothing is allocated after a thread's first call of its largest model).
 // s > 0 is required of an initial state (case validation); a state where it is not (M_full
 // not positive definite: |q| far beyond the linear model's range) makes the solve return NaN,
 // which the solvers end as a non-finite state (Termination::NonFinite).
@@ -145,10 +155,22 @@ class MatrixModel final : public LagrangianModel {
     const MatrixModel& m_;
   };
 
+  /// A matrix kept by its rows, row i over the columns lo[i] .. lo[i] + len[i] - 1, from its
+  /// first to its last nonzero (none: len 0); the entries outside are zeros and skipped.
+  struct Envelope {
+    std::vector<Eigen::Index> lo, len, off;  ///< off: where row i starts in val
+    Vec val;
+    explicit Envelope(const Mat& A = Mat());
+    /// (row i) . x, x of the matrix's width (contiguous)
+    double dot(int i, const double* x) const;
+  };
+
   /// b_i(q), the theta column of M_full (row i < n).
   double b(int i, VecIn q, double ubs, double ubc) const;
-  /// u_i = (M^-1 b)_i.
-  double u(int i, VecIn q, double ubs, double ubc) const;
+  /// b(q) and u = M^-1 b into bq[0..n), u[0..n); returns the Schur complement Jp - b.u.
+  double spin_column(VecIn q, double ubs, double ubc, double* bq, double* u) const;
+  /// x <- M^-1 x by the envelope solves with L and L^T.
+  void solve_rotor_mass(double* x) const;
   /// (u_b sin psi, u_b cos psi), zeros without an unbalance.
   void unbalance_terms(VecIn q, double& ubs, double& ubc) const;
 
@@ -168,11 +190,9 @@ class MatrixModel final : public LagrangianModel {
   int n_, N_, th_, xs_ = -1, ys_ = -1, ix_, iy_;  ///< (x_s, y_s, ix, iy: the first node's)
   bool sprung_;                                   ///< the first node's ring is sprung
   std::vector<Coordinate> coords_;
-  Mat L_;        ///< M = L L^T
-  Mat MinvG_;    ///< M^-1 G
-  Vec mx_, my_;  ///< M^-1 e_x, M^-1 e_y
-  // the transposes, so that row i of G, C, K is a contiguous column
-  Mat Gt_, Ct_, Kt_;
+  /// M, C, K, G by rows (M's rows as its columns: M is symmetric) and the factor L of
+  /// M = L L^T (row i: lo[i] .. i, the diagonal last)
+  Envelope Me_, Ce_, Ke_, Ge_, Le_;
   /// slot of phi among the reduced rotor coordinates; the other rotor coordinates, in order
   int slot_;
   std::vector<int> others_;
