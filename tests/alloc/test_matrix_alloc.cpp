@@ -1,9 +1,10 @@
 // Hot paths allocate nothing on the matrices model (model/matrix_model.hpp): its structured
-// mass solve (the Schur complement on theta, M factored once) and its forces use no
-// workspace. The paper's rotor written as matrices in code, resting at the bottom of the
-// clearance (a contact phase for the whole run, both formulations) and spinning freely with an
-// unbalance (free flight), through every solver: a run twice as long, with no event in the
-// extra time, must allocate the same number of times (test_no_allocation.cpp's method).
+// mass solve (the Schur complement on theta, M factored once) and its forces use no workspace
+// but thread-local scratch sized at a thread's first call. The paper's rotor written as matrices in
+// code, resting at the bottom of the clearance (a contact phase for the whole run, both
+// formulations) and spinning freely with an unbalance (free flight), through every solver: a run
+// twice as long, with no event in the extra time, must allocate the same number of times
+// (test_no_allocation.cpp's method).
 #include <catch2/catch.hpp>
 
 #include "alloc/run_allocations.hpp"

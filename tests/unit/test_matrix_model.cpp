@@ -404,8 +404,8 @@ TEST_CASE("Matrices model: the paper's rotor written as matrices is the rigid-ro
     INFO("orbit " << dz << " m, omega " << dw << " relative, " << matched << " samples");
     CHECK(matched >= 300);
     // Not bitwise: M_full is solved by another order of operations (a Cholesky factor of M
-    // and M^-1 G, against the rigid rotor's closed-form 2x2 inverses), so the states differ
-    // by round-off, which the integrators' error control and the event times carry along
+    // and u = M^-1 b by it, against the rigid rotor's closed-form 2x2 inverses), so the states
+    // differ by round-off, which the integrators' error control and the event times carry along
     // without growth on this window. 1e-12 m is 5e-9 of the clearance; omega 1e-9 relative
     // is the run's rtol.
     CHECK(dz <= 1e-12);
