@@ -15,7 +15,7 @@ namespace {
 /// sizes on one thread do not reallocate in turn; after a thread's first call of its largest
 /// model nothing is allocated.
 struct SpinScratch {
-  Vec b, u;
+  Vec b, u, z;  // (z: a right-hand side's rotor part, solve_mass)
 };
 
 SpinScratch& spin_scratch(int n) {
@@ -23,6 +23,7 @@ SpinScratch& spin_scratch(int n) {
   if (s.b.size() < n) {
     s.b.setZero(n);
     s.u.setZero(n);
+    s.z.setZero(n);
   }
   return s;
 }
@@ -184,6 +185,16 @@ MatrixModel::MatrixModel(const MatrixParams& p)
   Ce_ = Envelope(r.C);
   Ke_ = Envelope(r.K);
   Ge_ = Envelope(r.G);
+  unit_pos_.assign(static_cast<std::size_t>(n_), -1);
+  unit_solves_.setZero(n_, 2 * K_);
+  for (int k = 0; k < K_; ++k) {
+    for (const int i : {nd(k).ix, nd(k).iy}) {
+      const int c = i == nd(k).ix ? 2 * k : 2 * k + 1;
+      unit_pos_[static_cast<std::size_t>(i)] = c;
+      unit_solves_(i, c) = 1.0;
+      solve_rotor_mass(unit_solves_.col(c).data());
+    }
+  }
   const int lo = std::min(ix_, iy_);
   slot_ = lo;
   for (int i = 0; i < n_; ++i)
@@ -288,7 +299,23 @@ void MatrixModel::solve_mass(VecIn q, MatOut B) const {
       continue;
     }
     auto z = r.head(n_);
-    solve_rotor_mass(z.data());
+    // the rotor part's nonzeros: all on the contact nodes' coordinates (a contact's W_N, W_T;
+    // none: a spin or ring column), then their unit solves combined; else the envelope solves
+    int on_nodes = 0;
+    bool elsewhere = false;
+    for (int i = 0; i < n_ && !elsewhere; ++i) {
+      if (z[i] == 0.0) continue;
+      if (unit_pos_[static_cast<std::size_t>(i)] < 0) elsewhere = true;
+      ++on_nodes;
+    }
+    if (elsewhere) {
+      solve_rotor_mass(z.data());
+    } else if (on_nodes > 0) {
+      w.z.head(n_) = z;
+      z.setZero();
+      for (int i = 0; i < n_; ++i)
+        if (w.z[i] != 0.0) z += w.z[i] * unit_solves_.col(unit_pos_[static_cast<std::size_t>(i)]);
+    }
     const double th = (r[th_] - bq.dot(z)) / s;
     z -= th * u;
     r[th_] = th;
