@@ -3,19 +3,20 @@
 run-up scene with 48 elements (n = 196): the seal orbit's and the spin's difference against the
 number of modes kept, and the CPU time gained. Writes validation/fe/reduction.md.
 
-    validation/fe/reduction.py [build/rubdyn] [--quick]    # about 5 minutes of CPU
+    validation/fe/reduction.py [build/rubdyn] [--quick]    # about 2 minutes of CPU
 
 Scenes: (A) cases/fe-runup.toml's run-up as committed (prescribed spin: the spin's difference is
 that of the torque holding it, drive_torque); (B) the same rotor with the spin free, driven by
-a constant torque of 362 N m (fe-two-seal's), where omega is an unknown, its contact phases in
-minimal coordinates integrated by BDF (solver.contact_method, as in cases/fe-two-seal.toml). Both
-over 0.2 s, the event solver with BDF at rtol 1e-8, atol 1e-13 (the cases' setting) for every
-model. The scale of
-the integration error, below which a reduction's difference is not the reduction's: the
-Craig-Bampton model with 20 modes at rtol 1e-10 against rtol 1e-8 (the full model's own costs
-7 CPU minutes a run; at 12 elements its rtol 1e-8 and 1e-10 runs differ by 7e-12 m,
-validation/fe/cases.md). CPU seconds: user + system of the rubdyn process (reading the matrices
-and reducing included); full models once (7-8 CPU minutes each), reduced ones the median of 3
+a constant torque of 362 N m (fe-two-seal's), where omega is an unknown, its contact phases
+integrated by BDF (solver.contact_method, as in cases/fe-two-seal.toml): the full model's as the
+projected DAE with banded Newton systems, the reduced models' (dense) in minimal coordinates
+(solver.contact_phases = "auto", docs/fe-rotors.md section 10). Both over 0.2 s, the event solver
+with BDF at rtol 1e-8, atol 1e-13 (the cases' setting) for every model. The scale of the
+integration error, below which a reduction's difference is not the reduction's: the
+Craig-Bampton model with 20 modes at rtol 1e-10 against rtol 1e-8 (at 12 elements the full
+model's rtol 1e-8 and 1e-10 runs differ by 7e-12 m, validation/fe/cases.md). CPU seconds: user +
+system of the rubdyn process (reading the matrices and reducing included); full models once (6-8
+CPU seconds each since the banded solves; 6-7 CPU minutes before), reduced ones the median of 3
 rounds (1 with --quick).
 """
 import json
@@ -56,8 +57,8 @@ def main():
     assert prescribed in text
     case_b = os.path.join(out, "fe-runup-48-torque.toml")
     with open(case_b, "w") as f:
-        # (its contact phases in minimal coordinates by BDF too: with Adams there, the shaft's
-        # stiff modes cost hours of CPU on the full model)
+        # (its contact phases by BDF too: with Adams there, the shaft's stiff modes cost hours
+        # of CPU on the full model)
         f.write(text.replace(prescribed, "torque = 362.0\n")
                 .replace('name = "fe-runup-48"', 'name = "fe-runup-48-torque"'))
 
