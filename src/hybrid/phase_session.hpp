@@ -23,11 +23,11 @@
 #include <span>
 #include <vector>
 
-#include "rubdyn/core/bordered_band.hpp"
 #include "contact_modes.hpp"
 #include "cvode_session.hpp"
 #include "phase_chart.hpp"
 #include "phase_eval.hpp"
+#include "rubdyn/core/bordered_band.hpp"
 
 namespace rubdyn::detail {
 
