@@ -7,6 +7,24 @@
 
 namespace rubdyn::detail {
 
+namespace {
+
+/// An LU factorisation with partial pivoting is usable: no zero pivot.
+bool nonsingular(const Eigen::PartialPivLU<Mat>& lu) {
+  const auto& f = lu.matrixLU();
+  for (Eigen::Index i = 0; i < f.rows(); ++i)
+    if (f(i, i) == 0.0) return false;
+  return true;
+}
+
+std::vector<int> spin_only(int spin) {
+  return spin >= 0 ? std::vector<int>{spin} : std::vector<int>{};
+}
+
+}  // namespace
+
+BorderedBand::BorderedBand(int N, int spin) : BorderedBand(N, spin_only(spin)) {}
+
 BorderedBand::BorderedBand(int N, std::span<const int> border)
     : N_(N), border_(border.begin(), border.end()), pos_(static_cast<std::size_t>(N), 0) {
   nb_ = static_cast<int>(border_.size());
@@ -65,19 +83,27 @@ void BorderedBand::finish_pattern() {
   }
 }
 
+bool BorderedBand::factor(const Mat& A) {
+  if (!banded_) {
+    if (!A.allFinite()) return false;
+    dense_lu_.compute(A);
+    return nonsingular(dense_lu_);
+  }
+  return factor_band([&](int i, int j) { return A(i, j); });
+}
+
 bool BorderedBand::factor(const Mat& A0, double c1, const Mat& A1, double c2, const Mat& A2) {
-  auto S = [&](int i, int j) { return A0(i, j) + c1 * A1(i, j) + c2 * A2(i, j); };
   if (!banded_) {
     dense_ = A0;
     dense_.noalias() += c1 * A1;
     dense_.noalias() += c2 * A2;
-    if (!dense_.allFinite()) return false;
-    dense_lu_.compute(dense_);
-    const auto& lu = dense_lu_.matrixLU();
-    for (int i = 0; i < N_; ++i)
-      if (lu(i, i) == 0.0) return false;
-    return true;
+    return factor(dense_);
   }
+  return factor_band([&](int i, int j) { return A0(i, j) + c1 * A1(i, j) + c2 * A2(i, j); });
+}
+
+template <class Entry>
+bool BorderedBand::factor_band(const Entry& S) {
   // the band of A, with kl rows of room above it for the fill of the row interchanges
   std::fill(ab_.begin(), ab_.begin() + static_cast<std::ptrdiff_t>(ld_) * m_, 0.0);
   for (int jj = 0; jj < m_; ++jj) {
@@ -124,10 +150,7 @@ bool BorderedBand::factor(const Mat& A0, double c1, const Mat& A1, double c2, co
   corner_.noalias() -= R_ * X_;
   if (!corner_.allFinite()) return false;
   small_lu_.compute(corner_);
-  const auto& lu = small_lu_.matrixLU();
-  for (int i = 0; i < nb_; ++i)
-    if (lu(i, i) == 0.0) return false;
-  return true;
+  return nonsingular(small_lu_);
 }
 
 void BorderedBand::band_solve(double* b) const {

@@ -27,9 +27,7 @@ NewtonStructure assess_newton_structure(const LagrangianModel& model, double t, 
   // d(M a)/dq's pattern for a generic a (every entry of a nonzero)
   const Vec ones = Vec::Ones(n);
   model.mass_matrix_product_jacobian(q, ones, dMa);
-  std::vector<int> border;
-  if (model.spin_coordinate() >= 0) border.push_back(model.spin_coordinate());
-  detail::BorderedBand band(n, border);
+  detail::BorderedBand band(n, model.spin_coordinate());
   band.reset_pattern();
   for (const Mat* A : {&M, &dfdq, &dfdv, &dMa}) band.detect(*A);
   band.finish_pattern();

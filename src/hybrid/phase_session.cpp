@@ -122,9 +122,7 @@ PhaseSession::PhaseSession(const PhaseContext& ctx, const SessionSettings& s, Se
     // sized by a factorisation (Eigen's LDLT(n) leaves its info member uninitialised, and
     // assigning that object reads it: UBSan's invalid enum load)
     ldlt_.compute(Mat::Identity(n_, n_));
-    std::vector<int> border;
-    if (m_.spin_coordinate() >= 0) border.push_back(m_.spin_coordinate());
-    band_ = std::make_unique<BorderedBand>(n_, border);
+    band_ = std::make_unique<BorderedBand>(n_, m_.spin_coordinate());
   }
   switch (kind) {
     case SessionKind::Free:
@@ -140,8 +138,6 @@ PhaseSession::PhaseSession(const PhaseContext& ctx, const SessionSettings& s, Se
       cb.lsys = &PhaseSession::lsys_projected;
       cb.lsolve = &PhaseSession::lsolve_projected;
       jac_eval_ = std::make_unique<PhaseEval>(m_, K_);
-      q_jac_.setZero(n_);
-      v_jac_.setZero(n_);
       Wf_.setZero(n_, 2 * K_);
       Ht_.setZero(n_, 2 * K_);
       Y_.setZero(n_, 2 * K_);
@@ -346,10 +342,9 @@ int PhaseSession::lsys_projected(double t, const double* y, double gamma, int jo
   const int n = self->n_;
   const PhaseContext& ctx = self->ctx_;
   if (!jok) {
-    self->q_jac_ = CMap(y, n);
-    self->v_jac_ = CMap(y + n, n);
+    const CMap q(y, n), v(y + n, n);
     PhaseEval& e = *self->jac_eval_;
-    if (!e.dynamics(t, self->q_jac_, self->v_jac_, ctx.modes, ctx.laws))
+    if (!e.dynamics(t, q, v, ctx.modes, ctx.laws))
       return 1;  // recoverable: CVODE retries with a smaller step
     self->free_jacobians(t, y, &e.a());
     int mc = 0;

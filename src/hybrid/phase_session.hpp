@@ -115,8 +115,9 @@ class PhaseSession {
   // acceleration solves M a = f + W_f lambda, H a + wdot = 0 (W_f: the closed contacts' force
   // directions, W_N - mu s W_T in slip, W_N and W_T in stick; H: their constraint rows W_N^T,
   // and W_T^T in stick). Its Jacobian with W_f, H and wdot held fixed (their derivatives act on
-  // the contact coordinates only, by lambda / g0 and v / g0: below 1e-3 of M's entries at the
-  // steps these phases take) turns the Newton system into free flight's S bordered by them,
+  // the contact's own coordinates only, by about lambda / g0 and v / g0:
+  // tests/events/test_structured_newton.cpp) turns the Newton system into free flight's S
+  // bordered by them,
   //   [S  -W_f] [x_v]   [M b_v + gamma (df/dq - d(M a)/dq) b_q]
   //   [H    0 ] [mu ] = [H b_v                               ],   x_q = b_q + gamma x_v,
   // with d(M a)/dq at the constrained a: S factored once, then a Schur complement of at most
@@ -170,7 +171,6 @@ class PhaseSession {
   // the Projected session's constraints at its Jacobian's state: W_f, H^T (n x mc), S^-1 W_f,
   // and the Schur complement H S^-1 W_f (lsys_projected)
   std::unique_ptr<PhaseEval> jac_eval_;
-  Vec q_jac_, v_jac_;
   Mat Wf_, Ht_, Y_;
   int mc_ = 0;
   SmallMat E_;

@@ -9,7 +9,6 @@
 #include <Eigen/LU>
 #include <cmath>
 #include <memory>
-#include <vector>
 
 #include "rubdyn/core/bordered_band.hpp"
 #include "rubdyn/core/types.hpp"
@@ -127,11 +126,7 @@ class SimplifiedNewton {
   /// coordinate (-1: none), the dense row and column of a banded matrix.
   SimplifiedNewton(int n, int max_iterations, int border = -1)
       : max_(max_iterations), inv_(SMat<N>::Zero(n, n)), lu_(n), work_(n, n) {
-    if constexpr (N == Eigen::Dynamic) {
-      std::vector<int> b;
-      if (border >= 0) b.push_back(border);
-      band_ = std::make_unique<BorderedBand>(n, b);
-    }
+    if constexpr (N == Eigen::Dynamic) band_ = std::make_unique<BorderedBand>(n, border);
   }
 
   /// Before the first iteration of a step.
@@ -153,7 +148,7 @@ class SimplifiedNewton {
       banded_ = band_->banded();
       if (banded_) {
         // a singular J: NaN, so that the next iterate is non-finite and the step says so
-        singular_ = !band_->factor(J, 0.0, J, 0.0, J);
+        singular_ = !band_->factor(J);
       } else {
         work_ = J;
         if (!invert_in_place(work_, inv_)) inv_.setConstant(std::nan(""));

@@ -31,6 +31,8 @@ class BorderedBand {
  public:
   /// N coordinates; `border`: the dense ones (sorted, distinct, < N; may be empty).
   BorderedBand(int N, std::span<const int> border);
+  /// The border of a model's Newton systems: its spin coordinate (-1: none, no border).
+  BorderedBand(int N, int spin);
 
   /// Starts a detection: the band is the union of the patterns given to detect() after it.
   void reset_pattern();
@@ -42,6 +44,8 @@ class BorderedBand {
   /// Factors S = A0 + c1 A1 + c2 A2 (each N x N, within the detected pattern: entries outside
   /// are not read). False: S is singular.
   bool factor(const Mat& A0, double c1, const Mat& A1, double c2, const Mat& A2);
+  /// Factors S = A (within the detected pattern).
+  bool factor(const Mat& A);
   /// x = S^-1 b (b and x of size N, distinct).
   void solve(const double* b, double* x) const;
   /// y += alpha A x for a matrix within the detected pattern, touching the band and the border
@@ -56,6 +60,9 @@ class BorderedBand {
   double& ab(int i, int j) { return ab_[static_cast<std::size_t>(kv_ + i - j + j * ld_)]; }
   double ab(int i, int j) const { return ab_[static_cast<std::size_t>(kv_ + i - j + j * ld_)]; }
   void band_solve(double* b) const;  // b = A^-1 b in the banded order (m entries)
+  /// The banded factorisation of the matrix with entries S(i, j) (banded_).
+  template <class Entry>
+  bool factor_band(const Entry& S);
 
   int N_, m_, nb_;
   std::vector<int> inner_;   ///< the banded coordinates, in order (m of them)
@@ -69,7 +76,7 @@ class BorderedBand {
   Mat R_;       ///< R (nb x m)
   Mat corner_;  ///< D - R X
   Eigen::PartialPivLU<Mat> small_lu_, dense_lu_;
-  Mat dense_;                         ///< S, when factored densely
+  Mat dense_;                         ///< S, when factored densely from several matrices
   mutable std::vector<double> work_;  ///< (m + nb) in the banded order
   mutable Vec zb_;                    ///< the border's unknowns (nb)
 };
