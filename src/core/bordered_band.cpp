@@ -65,6 +65,16 @@ void BorderedBand::detect(const Mat& A) {
   }
 }
 
+void BorderedBand::detect(std::span<const MatrixEntry> A) {
+  for (const MatrixEntry& e : A) {
+    RUBDYN_DEMAND(e.i >= 0 && e.i < N_ && e.j >= 0 && e.j < N_);
+    const int pi = pos_[static_cast<std::size_t>(e.i)], pj = pos_[static_cast<std::size_t>(e.j)];
+    if (pi < 0 || pj < 0) continue;  // (a border entry)
+    if (pi > pj) kl_ = std::max(kl_, pi - pj);
+    if (pj > pi) ku_ = std::max(ku_, pj - pi);
+  }
+}
+
 void BorderedBand::finish_pattern() {
   // banded when its flops (about 2 m kl (kl + ku) for the LU, plus nb band solves) are fewer
   // than a third of the dense LU's 2/3 N^3: below that the dense kernels' speed wins
@@ -111,6 +121,53 @@ bool BorderedBand::factor_band(const Entry& S) {
     const int lo = std::max(0, jj - ku_), hi = std::min(m_ - 1, jj + kl_);
     for (int ii = lo; ii <= hi; ++ii) ab(ii, jj) = S(inner_[static_cast<std::size_t>(ii)], j);
   }
+  // the border: B (into X), R and D (into the corner)
+  for (int b = 0; b < nb_; ++b) {
+    const int jb = border_[static_cast<std::size_t>(b)];
+    for (int ii = 0; ii < m_; ++ii) {
+      const int i = inner_[static_cast<std::size_t>(ii)];
+      X_(ii, b) = S(i, jb);
+      R_(b, ii) = S(jb, i);
+    }
+    for (int c = 0; c < nb_; ++c) corner_(b, c) = S(jb, border_[static_cast<std::size_t>(c)]);
+  }
+  return factor_filled();
+}
+
+bool BorderedBand::factor(std::span<const MatrixEntry> A0, double c1,
+                          std::span<const MatrixEntry> A1, double c2,
+                          std::span<const MatrixEntry> A2) {
+  const auto lists = {std::pair{A0, 1.0}, std::pair{A1, c1}, std::pair{A2, c2}};
+  if (!banded_) {
+    dense_.setZero();
+    for (const auto& [A, c] : lists)
+      for (const MatrixEntry& e : A) dense_(e.i, e.j) += c * e.v;
+    return factor(dense_);
+  }
+  std::fill(ab_.begin(), ab_.begin() + static_cast<std::ptrdiff_t>(ld_) * m_, 0.0);
+  X_.setZero();
+  R_.setZero();
+  corner_.setZero();
+  for (const auto& [A, c] : lists) {
+    for (const MatrixEntry& e : A) {
+      const int pi = pos_[static_cast<std::size_t>(e.i)], pj = pos_[static_cast<std::size_t>(e.j)];
+      const double v = c * e.v;
+      if (pi >= 0 && pj >= 0) {
+        RUBDYN_DEMAND(pi - pj <= kl_ && pj - pi <= ku_);  // within the detected pattern
+        ab(pi, pj) += v;
+      } else if (pi >= 0) {
+        X_(pi, -1 - pj) += v;
+      } else if (pj >= 0) {
+        R_(-1 - pi, pj) += v;
+      } else {
+        corner_(-1 - pi, -1 - pj) += v;
+      }
+    }
+  }
+  return factor_filled();
+}
+
+bool BorderedBand::factor_filled() {
   // LU with partial pivoting (dgbtf2): column j's pivot among its kl subdiagonal rows; ju the
   // last column that row interchanges so far have filled
   int ju = 0;
@@ -136,17 +193,8 @@ bool BorderedBand::factor_band(const Entry& S) {
     }
   }
   if (nb_ == 0) return true;
-  // the border: X = A^-1 B, R, and the Schur complement D - R X
-  for (int b = 0; b < nb_; ++b) {
-    const int jb = border_[static_cast<std::size_t>(b)];
-    for (int ii = 0; ii < m_; ++ii) {
-      const int i = inner_[static_cast<std::size_t>(ii)];
-      X_(ii, b) = S(i, jb);
-      R_(b, ii) = S(jb, i);
-    }
-    band_solve(X_.col(b).data());
-    for (int c = 0; c < nb_; ++c) corner_(b, c) = S(jb, border_[static_cast<std::size_t>(c)]);
-  }
+  // the border: X = A^-1 B, and the Schur complement D - R X
+  for (int b = 0; b < nb_; ++b) band_solve(X_.col(b).data());
   corner_.noalias() -= R_ * X_;
   if (!corner_.allFinite()) return false;
   small_lu_.compute(corner_);
@@ -218,6 +266,11 @@ void BorderedBand::product(const Mat& A, double alpha, const double* x, double* 
     for (int j = 0; j < N_; ++j) s += A(b, j) * x[j];
     y[b] += alpha * s;
   }
+}
+
+void BorderedBand::product(std::span<const MatrixEntry> A, double alpha, const double* x,
+                           double* y) const {
+  for (const MatrixEntry& e : A) y[e.i] += alpha * (e.v * x[e.j]);
 }
 
 }  // namespace rubdyn::detail

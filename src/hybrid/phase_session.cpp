@@ -263,11 +263,9 @@ int PhaseSession::rhs_free(double t, const double* y, double* yd, void* user) {
 }
 
 // Free flight's Jacobian blocks at y (header); the band of S is detected from them.
-void PhaseSession::free_jacobians(double t, const double* y, const Vec* a) {
+void PhaseSession::free_jacobians(double t, const double* y, const Vec* a, bool lists) {
   const int n = n_;
   const CMap q(y, n), v(y + n, n);
-  m_.mass_matrix(q, M_);
-  m_.smooth_force_jacobians(t, q, v, dfdq_, dfdv_);
   if (a) {
     a_ = *a;
   } else {
@@ -276,12 +274,21 @@ void PhaseSession::free_jacobians(double t, const double* y, const Vec* a) {
     Eigen::Map<Mat> am(a_.data(), n, 1);
     m_.solve_mass(q, am);
   }
-  m_.mass_matrix_product_jacobian(q, a_, dMa_);
-  dfdq_ -= dMa_;
   band_->reset_pattern();
-  band_->detect(M_);
-  band_->detect(dfdq_);
-  band_->detect(dfdv_);
+  entries_ = lists && m_.newton_entries(t, q, v, a_, ne_);
+  if (entries_) {
+    band_->detect(ne_.M);
+    band_->detect(ne_.dq);
+    band_->detect(ne_.dv);
+  } else {
+    m_.mass_matrix(q, M_);
+    m_.smooth_force_jacobians(t, q, v, dfdq_, dfdv_);
+    m_.mass_matrix_product_jacobian(q, a_, dMa_);
+    dfdq_ -= dMa_;
+    band_->detect(M_);
+    band_->detect(dfdq_);
+    band_->detect(dfdv_);
+  }
   band_->finish_pattern();
 }
 
@@ -289,7 +296,7 @@ void PhaseSession::free_jacobians(double t, const double* y, const Vec* a) {
 int PhaseSession::jac_free(double t, const double* y, const double*, double* J, void* user) {
   auto* self = static_cast<PhaseSession*>(user);
   const int n = self->n_;
-  self->free_jacobians(t, y);
+  self->free_jacobians(t, y, nullptr, false);
   self->ldlt_.compute(self->M_);
   // column-major N x N, as SUNDIALS' dense matrix; the rows of the works are left 0 (they feed
   // back into nothing, so Newton converges on them with the state)
@@ -314,15 +321,25 @@ int PhaseSession::lsys_free(double t, const double* y, double gamma, int jok, in
   if (!jok) self->free_jacobians(t, y);
   *jcur = jok ? 0 : 1;
   self->gamma_ = gamma;
-  return self->band_->factor(self->M_, -gamma, self->dfdv_, -gamma * gamma, self->dfdq_) ? 0 : 1;
+  return self->factor_newton(gamma) ? 0 : 1;
+}
+
+bool PhaseSession::factor_newton(double gamma) {
+  if (entries_) return band_->factor(ne_.M, -gamma, ne_.dv, -gamma * gamma, ne_.dq);
+  return band_->factor(M_, -gamma, dfdv_, -gamma * gamma, dfdq_);
 }
 
 // x_v of the first block row: S x_v = M b_v + gamma (df/dq - d(M a)/dq) b_q.
 void PhaseSession::newton_velocities(const double* b) {
   const int n = n_;
   rhs_n_.setZero();
-  band_->product(M_, 1.0, b + n, rhs_n_.data());
-  band_->product(dfdq_, gamma_, b, rhs_n_.data());
+  if (entries_) {
+    band_->product(ne_.M, 1.0, b + n, rhs_n_.data());
+    band_->product(ne_.dq, gamma_, b, rhs_n_.data());
+  } else {
+    band_->product(M_, 1.0, b + n, rhs_n_.data());
+    band_->product(dfdq_, gamma_, b, rhs_n_.data());
+  }
   band_->solve(rhs_n_.data(), dv_.data());
 }
 
@@ -366,7 +383,7 @@ int PhaseSession::lsys_projected(double t, const double* y, double gamma, int jo
   }
   *jcur = jok ? 0 : 1;
   self->gamma_ = gamma;
-  if (!self->band_->factor(self->M_, -gamma, self->dfdv_, -gamma * gamma, self->dfdq_)) return 1;
+  if (!self->factor_newton(gamma)) return 1;
   const int mc = self->mc_;
   if (mc == 0) return 0;
   for (int j = 0; j < mc; ++j) self->band_->solve(self->Wf_.col(j).data(), self->Y_.col(j).data());

@@ -134,8 +134,12 @@ class PhaseSession {
  private:
   void to_full(const double* y, Vec& q, Vec& v) const;
   /// Free flight's Jacobian blocks at y: M, df/dv and df/dq - d(M a)/dq (in dfdq_) with a
-  /// the given acceleration (null: free flight's M^-1 f, into a_), and their band (band_).
-  void free_jacobians(double t, const double* y, const Vec* a = nullptr);
+  /// the given acceleration (null: free flight's M^-1 f, into a_), and their band (band_). As
+  /// the model's entry lists (ne_, entries_ true) where it gives them and `lists` allows, in
+  /// O(entries) instead of O(n^2); else dense.
+  void free_jacobians(double t, const double* y, const Vec* a = nullptr, bool lists = true);
+  /// Factors S = M - gamma df/dv - gamma^2 (df/dq - d(M a)/dq) of the last Jacobian.
+  bool factor_newton(double gamma);
   /// dv_ = S^-1 (M b_v + gamma (df/dq - d(M a)/dq) b_q), b = (b_q, b_v, ...).
   void newton_velocities(const double* b);
   void powers(double t, VecIn q, VecIn v, const PhaseEval& e, double* w) const;
@@ -164,6 +168,8 @@ class PhaseSession {
   // free flight's Jacobian (BDF): M, df/dq - d(M a)/dq, df/dv at its state, and the Newton
   // system reduced to the n x n S = M - gamma df/dv - gamma^2 (df/dq - d(M a)/dq) (lsys_free)
   Mat M_, dfdq_, dfdv_, dMa_;
+  NewtonEntries ne_;      ///< the same as entry lists (entries_)
+  bool entries_ = false;  ///< the last Jacobian is in ne_ (else in the dense blocks)
   Vec f_, a_, rhs_n_, dv_;
   double gamma_ = 0.0;
   Eigen::LDLT<Mat> ldlt_;               ///< M's, for the dense reference (jac_free)

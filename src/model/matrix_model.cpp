@@ -57,9 +57,20 @@ MatrixModel::Envelope::Envelope(const Mat& A) {
 }
 
 double MatrixModel::Envelope::dot(int i, const double* x) const {
+  // rows of a few to a few tens of entries: a plain loop with two partial sums (a fixed order,
+  // the same bits every run) instead of a general dot product's set-up
   const auto k = static_cast<std::size_t>(i);
-  return Eigen::Map<const Vec>(val.data() + off[k], len[k])
-      .dot(Eigen::Map<const Vec>(x + lo[k], len[k]));
+  const double* a = val.data() + off[k];
+  const double* b = x + lo[k];
+  const Eigen::Index m = len[k];
+  double s0 = 0.0, s1 = 0.0;
+  Eigen::Index j = 0;
+  for (; j + 1 < m; j += 2) {
+    s0 += a[j] * b[j];
+    s1 += a[j + 1] * b[j + 1];
+  }
+  if (j < m) s0 += a[j] * b[j];
+  return s0 + s1;
 }
 
 std::vector<Coordinate> matrix_model_coordinates(int n, const std::vector<std::string>& names,
@@ -270,8 +281,14 @@ void MatrixModel::mass_product(VecIn q, VecIn x, VecOut y) const {
   double ubs, ubc;
   unbalance_terms(q, ubs, ubc);
   double yth = p_.rotor.Jp * x[th_];
+  bool rotor_zero = true;  // (x = the spin's unit vector: a prescribed spin's M e_theta alpha)
+  for (int i = 0; i < n_ && rotor_zero; ++i) rotor_zero = x[i] == 0.0;
   for (int i = 0; i < n_; ++i) {
     const double bi = b(i, q, ubs, ubc);
+    if (rotor_zero) {  // (the same values: M's row times zeros adds nothing)
+      y[i] = bi * x[th_];
+      continue;
+    }
     y[i] = Me_.dot(i, x.data()) + bi * x[th_];
     yth += bi * x[i];
   }
@@ -281,6 +298,112 @@ void MatrixModel::mass_product(VecIn q, VecIn x, VecOut y) const {
     y[nd.xs] = nd.stator.mass * x[nd.xs];
     y[nd.ys] = nd.stator.mass * x[nd.ys];
   }
+}
+
+void MatrixModel::solve_rotor_rhs(double* x, double* tmp) const {
+  // the nonzeros: all on the contact nodes' coordinates (a contact's W_N, W_T; none: a spin or
+  // ring column), then their unit solves combined; else the envelope solve
+  int on_nodes = 0;
+  bool elsewhere = false;
+  for (int i = 0; i < n_ && !elsewhere; ++i) {
+    if (x[i] == 0.0) continue;
+    if (unit_pos_[static_cast<std::size_t>(i)] < 0) elsewhere = true;
+    ++on_nodes;
+  }
+  if (elsewhere) {
+    solve_rotor_mass(x);
+  } else if (on_nodes > 0) {
+    Eigen::Map<Vec> z(x, n_), t(tmp, n_);
+    t = z;
+    z.setZero();
+    for (int i = 0; i < n_; ++i)
+      if (t[i] != 0.0) z += t[i] * unit_solves_.col(unit_pos_[static_cast<std::size_t>(i)]);
+  }
+}
+
+bool MatrixModel::solve_mass_without(int s, VecIn /*q*/, MatOut B) const {
+  // without the spin, M is block diagonal: the rotor's M and the rings' masses (the spin's
+  // coordinate th_ = n_ comes after the rotor's, so the rings' rows move up by one)
+  if (s != th_) return false;
+  RUBDYN_DEMAND(B.rows() == N_ - 1);
+  SpinScratch& w = spin_scratch(n_);
+  for (Eigen::Index j = 0; j < B.cols(); ++j) {
+    auto r = B.col(j);
+    solve_rotor_rhs(r.data(), w.z.data());
+    for (const Node& nd : nodes_) {
+      if (!nd.sprung()) continue;
+      r[nd.xs - 1] /= nd.stator.mass;
+      r[nd.ys - 1] /= nd.stator.mass;
+    }
+  }
+  return true;
+}
+
+bool MatrixModel::newton_entries(double /*t*/, VecIn q, VecIn v, VecIn a, NewtonEntries& e) const {
+  // the dense Jacobians' entries (mass_matrix, smooth_force_jacobians,
+  // mass_matrix_product_jacobian) on the envelopes only
+  e.clear();
+  const auto& L = p_.loads;
+  const double om = v[th_], at = a[th_];
+  double ubs, ubc;
+  unbalance_terms(q, ubs, ubc);
+  // one envelope's entries, row i of A (env built from A) or of A^T (transposed)
+  const auto rows = [this](const Envelope& env, bool transposed, double c,
+                           std::vector<MatrixEntry>& out) {
+    for (int i = 0; i < n_; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      for (Eigen::Index j = 0; j < env.len[k]; ++j) {
+        const int col = static_cast<int>(env.lo[k] + j);
+        const double val = c * env.val[static_cast<std::size_t>(env.off[k] + j)];
+        if (transposed)
+          out.push_back({col, i, val});
+        else
+          out.push_back({i, col, val});
+      }
+    }
+  };
+  // M: the rotor's, the spin's row and column b(q), Jp, the rings' masses
+  rows(Me_, true, 1.0, e.M);
+  for (int i = 0; i < n_; ++i) {
+    const double bi = b(i, q, ubs, ubc);
+    e.M.push_back({i, th_, bi});
+    e.M.push_back({th_, i, bi});
+  }
+  e.M.push_back({th_, th_, p_.rotor.Jp});
+  // df/dq - d(M a)/dq: -K, the unbalance's terms, -G a_theta / 2 and the spin's row -(G^T a)/2
+  rows(Ke_, false, -1.0, e.dq);
+  rows(Ge_, false, -0.5 * at, e.dq);
+  for (int i = 0; i < n_; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    for (Eigen::Index j = 0; j < Ge_.len[k]; ++j) {
+      const int col = static_cast<int>(Ge_.lo[k] + j);
+      e.dq.push_back({th_, col, -0.5 * Ge_.val[static_cast<std::size_t>(Ge_.off[k] + j)] * a[i]});
+    }
+  }
+  e.dq.push_back({ix_, th_, ubc * at});
+  e.dq.push_back({iy_, th_, ubs * at});
+  e.dq.push_back({th_, th_, ubc * a[ix_] + ubs * a[iy_]});
+  // df/dv: -C - Omega G, the spin's column -G v, the torque's slope
+  rows(Ce_, false, -1.0, e.dv);
+  rows(Ge_, false, -om, e.dv);
+  for (int i = 0; i < n_; ++i) e.dv.push_back({i, th_, -Ge_.dot(i, v.data())});
+  e.dv.push_back({th_, th_, L.drive_torque_slope()});
+  if (L.unbalance != 0.0) {
+    e.dq.push_back({ix_, th_, -om * om * ubs});
+    e.dq.push_back({iy_, th_, om * om * ubc});
+    e.dq.push_back({th_, th_, L.gravity * ubs});
+    e.dv.push_back({ix_, th_, 2.0 * om * ubc});
+    e.dv.push_back({iy_, th_, 2.0 * om * ubs});
+  }
+  for (const Node& nd : nodes_) {
+    if (!nd.sprung()) continue;
+    for (const int i : {nd.xs, nd.ys}) {
+      e.M.push_back({i, i, nd.stator.mass});
+      e.dq.push_back({i, i, -nd.stator.k});
+      e.dv.push_back({i, i, -nd.stator.c});
+    }
+  }
+  return true;
 }
 
 void MatrixModel::solve_mass(VecIn q, MatOut B) const {
@@ -299,23 +422,7 @@ void MatrixModel::solve_mass(VecIn q, MatOut B) const {
       continue;
     }
     auto z = r.head(n_);
-    // the rotor part's nonzeros: all on the contact nodes' coordinates (a contact's W_N, W_T;
-    // none: a spin or ring column), then their unit solves combined; else the envelope solves
-    int on_nodes = 0;
-    bool elsewhere = false;
-    for (int i = 0; i < n_ && !elsewhere; ++i) {
-      if (z[i] == 0.0) continue;
-      if (unit_pos_[static_cast<std::size_t>(i)] < 0) elsewhere = true;
-      ++on_nodes;
-    }
-    if (elsewhere) {
-      solve_rotor_mass(z.data());
-    } else if (on_nodes > 0) {
-      w.z.head(n_) = z;
-      z.setZero();
-      for (int i = 0; i < n_; ++i)
-        if (w.z[i] != 0.0) z += w.z[i] * unit_solves_.col(unit_pos_[static_cast<std::size_t>(i)]);
-    }
+    solve_rotor_rhs(z.data(), w.z.data());
     const double th = (r[th_] - bq.dot(z)) / s;
     z -= th * u;
     r[th_] = th;

@@ -13,6 +13,7 @@ struct PrescribedSpin::Scratch {
   Vec qf, vf, af, xf, yf, ff;
   Mat Mf, dqf, dvf, Jf, Bf;
   ContactKinematics cf;
+  NewtonEntries ne;
   void size(int nf) {
     if (qf.size() == nf) return;
     for (Vec* x : {&qf, &vf, &af, &xf, &yf, &ff}) x->setZero(nf);
@@ -114,12 +115,13 @@ void PrescribedSpin::mass_product(VecIn q, VecIn x, VecOut y) const {
 }
 
 void PrescribedSpin::solve_mass(VecIn q, MatOut B) const {
-  // With the inner inverse [[A, u], [u^T, sigma]] (spin last, for the argument), the inverse
-  // of the block without the spin is A - u u^T / sigma: the inner solve of (b, 0) gives
-  // (A b, u^T b), of e_spin gives (u, sigma).
   Scratch& s = scratch();
-  const Eigen::Index k = B.cols();
   insert(q, s_, theta0_, s.qf);
+  if (inner_->solve_mass_without(s_, s.qf, B)) return;  // (the inner's block without the spin)
+  // Else with the inner inverse [[A, u], [u^T, sigma]] (spin last, for the argument), the
+  // inverse of the block without the spin is A - u u^T / sigma: the inner solve of (b, 0) gives
+  // (A b, u^T b), of e_spin gives (u, sigma).
+  const Eigen::Index k = B.cols();
   if (s.Bf.cols() < k + 1) s.Bf.resize(n_ + 1, k + 1);  // (more right-hand sides than ever)
   auto Bk = s.Bf.leftCols(k + 1);
   for (Eigen::Index j = 0; j < k; ++j) {
@@ -172,6 +174,27 @@ void PrescribedSpin::smooth_force_jacobians(double t, VecIn q, VecIn v, MatOut d
   }
   drop(s.dqf, s_, dfdq);
   drop(s.dvf, s_, dfdv);
+}
+
+bool PrescribedSpin::newton_entries(double t, VecIn q, VecIn v, VecIn a, NewtonEntries& e) const {
+  // the inner's entries at the full state with the spin's acceleration alpha (d(M a)/dq is
+  // linear in a: smooth_force_jacobians' alpha term and mass_matrix_product_jacobian's in one),
+  // without the spin's row and column
+  Scratch& s = scratch();
+  embed(t, q, v, s);
+  insert(a, s_, alpha_, s.af);
+  if (!inner_->newton_entries(t, s.qf, s.vf, s.af, s.ne)) return false;
+  e.clear();
+  const auto keep = [this](const std::vector<MatrixEntry>& in, std::vector<MatrixEntry>& out) {
+    for (const MatrixEntry& x : in) {
+      if (x.i == s_ || x.j == s_) continue;
+      out.push_back({x.i - (x.i > s_ ? 1 : 0), x.j - (x.j > s_ ? 1 : 0), x.v});
+    }
+  };
+  keep(s.ne.M, e.M);
+  keep(s.ne.dq, e.dq);
+  keep(s.ne.dv, e.dv);
+  return true;
 }
 
 void PrescribedSpin::compute_contact(int k, double t, VecIn q, VecIn v,

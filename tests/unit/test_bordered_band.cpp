@@ -44,19 +44,44 @@ struct Errors {
   bool banded = false;
 };
 
-Errors compare(int N, int kl, int ku, const std::vector<int>& border, bool weak, unsigned seed) {
+/// A's nonzeros as an entry list, each split into two parts (1/4 and 3/4) and the whole list
+/// shuffled: the lists' entries at one position add up, in any order.
+std::vector<MatrixEntry> entries(const Mat& A, unsigned seed) {
+  std::vector<MatrixEntry> e;
+  for (int j = 0; j < A.cols(); ++j)
+    for (int i = 0; i < A.rows(); ++i)
+      if (A(i, j) != 0.0) {
+        e.push_back({i, j, 0.25 * A(i, j)});
+        e.push_back({i, j, 0.75 * A(i, j)});
+      }
+  std::mt19937 rng(seed);
+  std::shuffle(e.begin(), e.end(), rng);
+  return e;
+}
+
+/// `lists`: the matrices given to detect, factor and product as entry lists.
+Errors compare(int N, int kl, int ku, const std::vector<int>& border, bool weak, unsigned seed,
+               bool lists = false) {
   const Mat A0 = random_bordered(N, kl, ku, border, weak, seed);
   // the other two within the same pattern, narrower
   const Mat A1 = random_bordered(N, kl / 2, ku, border, false, seed + 1);
   const Mat A2 = random_bordered(N, kl, ku / 2, border, false, seed + 2);
   const double c1 = -0.3, c2 = 0.7;
+  const std::vector<MatrixEntry> E0 = entries(A0, seed), E1 = entries(A1, seed + 1),
+                                 E2 = entries(A2, seed + 2);
   BorderedBand bb(N, border);
   bb.reset_pattern();
-  bb.detect(A0);
-  bb.detect(A1);
-  bb.detect(A2);
+  if (lists) {
+    bb.detect(E0);
+    bb.detect(E1);
+    bb.detect(E2);
+  } else {
+    bb.detect(A0);
+    bb.detect(A1);
+    bb.detect(A2);
+  }
   bb.finish_pattern();
-  REQUIRE(bb.factor(A0, c1, A1, c2, A2));
+  REQUIRE((lists ? bb.factor(E0, c1, E1, c2, E2) : bb.factor(A0, c1, A1, c2, A2)));
   const Mat S = A0 + c1 * A1 + c2 * A2;
   std::mt19937 rng(seed + 3);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -66,7 +91,10 @@ Errors compare(int N, int kl, int ku, const std::vector<int>& border, bool weak,
   bb.solve(b.data(), x.data());
   const Vec xr = S.partialPivLu().solve(b);
   Vec y = Vec::Constant(N, 0.5), yr = y;
-  bb.product(A1, -2.0, b.data(), y.data());
+  if (lists)
+    bb.product(E1, -2.0, b.data(), y.data());
+  else
+    bb.product(A1, -2.0, b.data(), y.data());
   yr += -2.0 * A1 * b;
   Errors e;
   e.solve = (x - xr).norm() / xr.norm();
@@ -102,11 +130,19 @@ TEST_CASE("Bordered band LU equals the dense LU", "[unit][newton]") {
   for (const Case& c : cases) {
     INFO("N " << c.N << ", kl " << c.kl << ", ku " << c.ku << ", border " << c.border.size()
               << (c.weak ? ", weak diagonal" : ""));
-    const Errors e = compare(c.N, c.kl, c.ku, c.border, c.weak, seed += 10);
-    CHECK(e.solve <= 1e-10);
-    CHECK(e.product <= 1e-13);
-    // the flop count chooses: the band below a third of the dense LU's flops
-    CHECK(e.banded == (c.N >= 60));
+    seed += 10;
+    // the same matrices as dense blocks and as entry lists (model/newton_entries): the lists'
+    // parts (1/4 + 3/4 of each entry, shuffled) add up to the entry within an eps or two, so
+    // the same bounds hold; a lost entry, a border entry put in the band or a detection that
+    // misses a list's entries gives O(1) or fails kl/ku
+    for (const bool lists : {false, true}) {
+      INFO((lists ? "entry lists" : "dense blocks"));
+      const Errors e = compare(c.N, c.kl, c.ku, c.border, c.weak, seed, lists);
+      CHECK(e.solve <= 1e-10);
+      CHECK(e.product <= 1e-13);
+      // the flop count chooses: the band below a third of the dense LU's flops
+      CHECK(e.banded == (c.N >= 60));
+    }
   }
 }
 

@@ -353,3 +353,94 @@ TEST_CASE("Prescribed spin around a banded matrices model: forces and solves are
   ps.solve_mass(q, X);
   CHECK((X - Xref).cwiseAbs().maxCoeff() <= kTol * Xref.cwiseAbs().maxCoeff());
 }
+
+namespace {
+
+/// An entry list summed into a dense N x N matrix, and the sums of its entries' magnitudes.
+Mat scatter(const std::vector<MatrixEntry>& E, int N, bool magnitudes = false) {
+  Mat A = Mat::Zero(N, N);
+  for (const MatrixEntry& e : E) A(e.i, e.j) += magnitudes ? std::abs(e.v) : e.v;
+  return A;
+}
+
+/// max |list - dense| / max(sum of the list's |terms|) over the entries: each position adds at
+/// most n + 2 terms, here and in the dense Jacobians (the spin row of d(M a)/dq: (G^T a)_k / 2
+/// a sum over n rows), so either rounds off by at most about (n + 2) eps of those magnitudes,
+/// 53 * 1.1e-16 = 6e-15 at n = 52: kTol (1e-12) holds with room; a missing, doubled or
+/// misplaced entry gives O(1).
+double list_error(const std::vector<MatrixEntry>& E, const Mat& dense) {
+  const int N = static_cast<int>(dense.rows());
+  const Mat mag = scatter(E, N, true) + dense.cwiseAbs();
+  return (scatter(E, N) - dense).cwiseAbs().maxCoeff() / mag.maxCoeff();
+}
+
+std::vector<std::pair<int, int>> positions(const std::vector<MatrixEntry>& E) {
+  std::vector<std::pair<int, int>> p;
+  for (const MatrixEntry& e : E) p.emplace_back(e.i, e.j);
+  return p;
+}
+
+/// newton_entries against the dense Jacobians of the same model at (t, q, v, a).
+void check_entries(const LagrangianModel& m, double t, const Vec& q, const Vec& v, const Vec& a) {
+  const int N = m.num_dofs();
+  NewtonEntries e;
+  REQUIRE(m.newton_entries(t, q, v, a, e));
+  Mat M(N, N), dq(N, N), dv(N, N), J(N, N);
+  m.mass_matrix(q, M);
+  m.smooth_force_jacobians(t, q, v, dq, dv);
+  m.mass_matrix_product_jacobian(q, a, J);
+  dq -= J;
+  CHECK(list_error(e.M, M) <= kTol);
+  CHECK(list_error(e.dq, dq) <= kTol);
+  CHECK(list_error(e.dv, dv) <= kTol);
+  // structural: the same positions at rest (zero speed, acceleration and angle), where many of
+  // the values are 0, so that a band detected once holds for every state
+  NewtonEntries rest;
+  const Vec z = Vec::Zero(N);
+  REQUIRE(m.newton_entries(t, z, z, z, rest));
+  CHECK(positions(rest.M) == positions(e.M));
+  CHECK(positions(rest.dq) == positions(e.dq));
+  CHECK(positions(rest.dv) == positions(e.dv));
+}
+
+}  // namespace
+
+TEST_CASE("Matrices model: the Newton matrices' entry lists are its dense Jacobians",
+          "[matrices][banded]") {
+  for (const auto& [p, seed] : {std::pair{fe_chain(13, 6, 16), 26u}, {dense_random(10, 33), 43u}}) {
+    const MatrixModel m(p);
+    const int N = m.num_dofs();
+    Vec q, v;
+    random_state(N, seed, q, v);
+    Vec a(N);
+    for (int i = 0; i < N; ++i) a[i] = std::cos(3.0 * i + seed);
+    check_entries(m, 0.0, q, v, a);
+    // the prescribed spin around it: the inner's lists without the spin, with its alpha
+    const PrescribedSpin ps(std::make_unique<MatrixModel>(p), 0.1, 0.3, 50.0, 400.0);
+    const int th = N - 3;
+    check_entries(ps, 0.13, drop(q, th), drop(v, th), drop(a, th));
+  }
+}
+
+TEST_CASE("Matrices model: the solve without the spin is the block's dense solve",
+          "[matrices][banded]") {
+  // solve_mass_without(spin): M_full without the spin's row and column, against LDLT of that
+  // block assembled densely (the solves' tolerance argument at the top of the file); any other
+  // coordinate is refused (the solvers then take the whole M's Schur complement)
+  const MatrixParams p = fe_chain(12, 6, 17);
+  const MatrixModel m(p);
+  const Dense d(p);
+  Vec q, v;
+  random_state(d.N, 27, q, v);
+  const Mat A = drop(d.mass(q), d.th);
+  Mat R(d.N - 1, 3);
+  for (int i = 0; i < d.N - 1; ++i)
+    R(i, 0) = std::sin(1.0 + i), R(i, 1) = std::cos(2.0 * i), R(i, 2) = i == d.ix ? 1.0 : 0.0;
+  const Mat Xref = A.ldlt().solve(R);
+  Mat X = R;
+  REQUIRE(m.solve_mass_without(d.th, q, X));
+  for (int j = 0; j < 3; ++j)
+    CHECK((X.col(j) - Xref.col(j)).cwiseAbs().maxCoeff() <=
+          kTol * Xref.col(j).cwiseAbs().maxCoeff());
+  CHECK_FALSE(m.solve_mass_without(d.ix, q, X));
+}

@@ -23,6 +23,7 @@
 #include <span>
 #include <vector>
 
+#include "rubdyn/core/matrix_entry.hpp"
 #include "rubdyn/core/types.hpp"
 
 namespace rubdyn::detail {
@@ -38,12 +39,18 @@ class BorderedBand {
   void reset_pattern();
   /// Widens the band to A's nonzeros (A N x N, dense storage); O(N^2).
   void detect(const Mat& A);
+  /// Widens the band to the positions of an entry list (their values are not read); O(entries).
+  void detect(std::span<const MatrixEntry> A);
   /// Ends a detection: sizes the workspaces and chooses banded or dense factorisation.
   void finish_pattern();
 
   /// Factors S = A0 + c1 A1 + c2 A2 (each N x N, within the detected pattern: entries outside
   /// are not read). False: S is singular.
   bool factor(const Mat& A0, double c1, const Mat& A1, double c2, const Mat& A2);
+  /// The same with the matrices as entry lists (within the detected pattern); O(entries) to
+  /// assemble, the factorisation as above.
+  bool factor(std::span<const MatrixEntry> A0, double c1, std::span<const MatrixEntry> A1,
+              double c2, std::span<const MatrixEntry> A2);
   /// Factors S = A (within the detected pattern).
   bool factor(const Mat& A);
   /// x = S^-1 b (b and x of size N, distinct).
@@ -51,6 +58,9 @@ class BorderedBand {
   /// y += alpha A x for a matrix within the detected pattern, touching the band and the border
   /// only.
   void product(const Mat& A, double alpha, const double* x, double* y) const;
+
+  /// y += alpha A x for an entry list; O(entries).
+  void product(std::span<const MatrixEntry> A, double alpha, const double* x, double* y) const;
 
   bool banded() const { return banded_; }
   int kl() const { return kl_; }
@@ -63,6 +73,8 @@ class BorderedBand {
   /// The banded factorisation of the matrix with entries S(i, j) (banded_).
   template <class Entry>
   bool factor_band(const Entry& S);
+  /// Factors the band (ab_) and the border (X_ = B, R_, corner_ = D) filled in.
+  bool factor_filled();
 
   int N_, m_, nb_;
   std::vector<int> inner_;   ///< the banded coordinates, in order (m of them)

@@ -31,6 +31,7 @@
 #include "rubdyn/contact/contact_kinematics.hpp"
 #include "rubdyn/contact/contact_law.hpp"
 #include "rubdyn/contact/ring_chart.hpp"
+#include "rubdyn/core/matrix_entry.hpp"
 #include "rubdyn/core/types.hpp"
 #include "rubdyn/model/coordinates.hpp"
 
@@ -114,6 +115,21 @@ class LagrangianModel {
   /// df/dq and df/dv.
   virtual void smooth_force_jacobians(double t, VecIn q, VecIn v, MatOut dfdq,
                                       MatOut dfdv) const = 0;
+  /// The matrices of free flight's Newton systems as entry lists, for wide models whose dense
+  /// n x n Jacobians would cost O(n^2) per Jacobian: e.M = M(q), e.dq = df/dq - d(M a)/dq,
+  /// e.dv = df/dv (a: the acceleration at (t, q, v)), each the sum of its entries. The lists
+  /// are structural: an entry is listed where the matrix can be nonzero, whatever its value
+  /// now, so that their positions do not change with the state. The lists are cleared first;
+  /// they keep their capacity, so that only the first call of a session allocates. False (the
+  /// default): not provided, the solvers use the dense Jacobians above.
+  virtual bool newton_entries(double /*t*/, VecIn /*q*/, VecIn /*v*/, VecIn /*a*/,
+                              NewtonEntries& /*e*/) const {
+    return false;
+  }
+  /// Solves M'(q) X = B in place, M' the mass matrix without row and column `s` (B: n - 1 rows,
+  /// coordinate s left out), for models that solve it cheaper than through the whole M (a
+  /// prescribed spin's block). False (the default): not provided.
+  virtual bool solve_mass_without(int /*s*/, VecIn /*q*/, MatOut /*B*/) const { return false; }
 
   /// Number of unilateral contacts K >= 1. Every solver takes several (the event-driven
   /// integrator up to 8); none silently reduces them.

@@ -116,6 +116,10 @@ class MatrixModel final : public LagrangianModel {
   void mass_matrix_product_jacobian(VecIn q, VecIn a, MatOut J) const override;
   void smooth_forces(double t, VecIn q, VecIn v, VecOut f) const override;
   void smooth_force_jacobians(double t, VecIn q, VecIn v, MatOut dfdq, MatOut dfdv) const override;
+  /// The envelopes of M, C, K, G and the spin's row and column: O(n w) entries.
+  bool newton_entries(double t, VecIn q, VecIn v, VecIn a, NewtonEntries& e) const override;
+  /// s = the spin: the rotor's envelope solves and the rings' masses, no spin border.
+  bool solve_mass_without(int s, VecIn q, MatOut B) const override;
   int contact_count() const override { return K_; }
   void compute_contact(int k, double t, VecIn q, VecIn v, ContactKinematics& c) const override;
   double kinetic_energy(double t, VecIn q, VecIn v) const override;
@@ -175,6 +179,10 @@ class MatrixModel final : public LagrangianModel {
   void unbalance_terms(VecIn q, double& ubs, double& ubc) const;
 
   /// A contact node as the model uses it: its coordinates, ring coordinates (-1: rigid), law.
+  /// x = M_rotor^-1 x for a right-hand side x (n) from the contact nodes' unit solves when its
+  /// nonzeros are all on them, else by the envelope solve; `tmp`: n of scratch.
+  void solve_rotor_rhs(double* x, double* tmp) const;
+
   struct Node {
     int ix = 0, iy = 1, xs = -1, ys = -1;
     double radius = 0.05, gap = 2e-4;

@@ -62,6 +62,7 @@ class PrescribedSpin final : public LagrangianModel {
   double kinetic_energy(double t, VecIn q, VecIn v) const override;
   double potential_energy(double t, VecIn q) const override;
   SmoothPower smooth_power(double t, VecIn q, VecIn v) const override;
+  bool newton_entries(double t, VecIn q, VecIn v, VecIn a, NewtonEntries& e) const override;
   bool rheonomic() const override { return true; }
   double applied_power(double t, VecIn q, VecIn v, VecIn a, const ContactForce* F) const override;
   const std::vector<Observable>& observables() const override;
