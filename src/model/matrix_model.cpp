@@ -339,6 +339,21 @@ bool MatrixModel::solve_mass_without(int s, VecIn /*q*/, MatOut B) const {
   return true;
 }
 
+bool MatrixModel::spin_row(double /*t*/, VecIn q, VecIn v, VecIn a, double& Ma, double& f) const {
+  // mass_product's and smooth_forces' theta entries, term by term in their order
+  const auto& L = p_.loads;
+  double ubs, ubc;
+  unbalance_terms(q, ubs, ubc);
+  bool rotor_zero = true;
+  for (int i = 0; i < n_ && rotor_zero; ++i) rotor_zero = a[i] == 0.0;
+  Ma = p_.rotor.Jp * a[th_];
+  if (!rotor_zero)
+    for (int i = 0; i < n_; ++i) Ma += b(i, q, ubs, ubc) * a[i];
+  f = L.drive_torque(v[th_]);
+  if (L.unbalance != 0.0) f -= L.gravity * ubc;
+  return true;
+}
+
 bool MatrixModel::newton_entries(double /*t*/, VecIn q, VecIn v, VecIn a, NewtonEntries& e) const {
   // the dense Jacobians' entries (mass_matrix, smooth_force_jacobians,
   // mass_matrix_product_jacobian) on the envelopes only

@@ -246,9 +246,14 @@ double PrescribedSpin::drive_torque(double t, VecIn q, VecIn v, VecIn a,
   Scratch& s = scratch();
   embed(t, q, v, s);
   insert(a, s_, alpha_, s.af);
-  inner_->mass_product(s.qf, s.af, s.yf);
-  inner_->smooth_forces(t, s.qf, s.vf, s.ff);
-  double tau = s.yf[s_] - s.ff[s_];
+  double Ma, f;
+  if (!inner_->spin_row(t, s.qf, s.vf, s.af, Ma, f)) {
+    inner_->mass_product(s.qf, s.af, s.yf);
+    inner_->smooth_forces(t, s.qf, s.vf, s.ff);
+    Ma = s.yf[s_];
+    f = s.ff[s_];
+  }
+  double tau = Ma - f;
   for (int k = 0; k < inner_->contact_count(); ++k) {
     if (F[k].F_N == 0.0 && F[k].F_T == 0.0) continue;
     inner_->compute_contact(k, t, s.qf, s.vf, s.cf);

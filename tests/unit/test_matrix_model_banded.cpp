@@ -444,3 +444,27 @@ TEST_CASE("Matrices model: the solve without the spin is the block's dense solve
           kTol * Xref.col(j).cwiseAbs().maxCoeff());
   CHECK_FALSE(m.solve_mass_without(d.ix, q, X));
 }
+
+TEST_CASE("Matrices model: the spin's rows alone are mass_product's and smooth_forces' bits",
+          "[matrices][banded]") {
+  // spin_row computes the same terms in the same order (its contract: the same bits, so that a
+  // prescribed spin's drive torque does not change with it): compared with ==; with a rotor
+  // part of zeros (a prescribed spin's M e_theta alpha) and without
+  const MatrixParams p = fe_chain(12, 6, 18);
+  const MatrixModel m(p);
+  const int N = m.num_dofs(), th = N - 3;
+  Vec q, v;
+  random_state(N, 28, q, v);
+  Vec a(N), y(N), f(N);
+  for (int i = 0; i < N; ++i) a[i] = std::sin(0.7 * i + 0.2);
+  for (const bool zero_rotor : {false, true}) {
+    Vec x = a;
+    if (zero_rotor) x.head(th).setZero();
+    double Ma = 0.0, fth = 0.0;
+    REQUIRE(m.spin_row(0.2, q, v, x, Ma, fth));
+    m.mass_product(q, x, y);
+    m.smooth_forces(0.2, q, v, f);
+    CHECK(Ma == y[th]);
+    CHECK(fth == f[th]);
+  }
+}

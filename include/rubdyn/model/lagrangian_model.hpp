@@ -130,6 +130,13 @@ class LagrangianModel {
   /// coordinate s left out), for models that solve it cheaper than through the whole M (a
   /// prescribed spin's block). False (the default): not provided.
   virtual bool solve_mass_without(int /*s*/, VecIn /*q*/, MatOut /*B*/) const { return false; }
+  /// The spin coordinate's rows alone: (M(q) a)_s and f_s(t, q, v), the same values as
+  /// mass_product's and smooth_forces' entries s, in O(n w) instead of all rows (a prescribed
+  /// spin's drive torque at every right-hand side). False (the default): not provided.
+  virtual bool spin_row(double /*t*/, VecIn /*q*/, VecIn /*v*/, VecIn /*a*/, double& /*Ma*/,
+                        double& /*f*/) const {
+    return false;
+  }
 
   /// Number of unilateral contacts K >= 1. Every solver takes several (the event-driven
   /// integrator up to 8); none silently reduces them.

@@ -120,6 +120,8 @@ class MatrixModel final : public LagrangianModel {
   bool newton_entries(double t, VecIn q, VecIn v, VecIn a, NewtonEntries& e) const override;
   /// s = the spin: the rotor's envelope solves and the rings' masses, no spin border.
   bool solve_mass_without(int s, VecIn q, MatOut B) const override;
+  /// (M a)_theta and f_theta as mass_product and smooth_forces compute them (the same bits).
+  bool spin_row(double t, VecIn q, VecIn v, VecIn a, double& Ma, double& f) const override;
   int contact_count() const override { return K_; }
   void compute_contact(int k, double t, VecIn q, VecIn v, ContactKinematics& c) const override;
   double kinetic_energy(double t, VecIn q, VecIn v) const override;
