@@ -400,8 +400,9 @@ std::string branch_json(const CaseBranch& b) {
   for (std::size_t i = 0; i < r.specials.size(); ++i) {
     const auto& x = r.specials[i];
     fmt::format_to(out,
-                   "{}\n    {{\"kind\": {}, \"value\": {}, \"between\": [{}, {}], \"how\": {}}}",
-                   i ? "," : "", str(x.kind), num(x.lambda), x.after,
+                   "{}\n    {{\"kind\": {}, \"value\": {}, \"spread\": {}, \"between\": [{}, {}], "
+                   "\"how\": {}}}",
+                   i ? "," : "", str(x.kind), num(x.lambda), num(x.spread), x.after,
                    // null: beyond the last point (the corrector's iterates crossed it)
                    x.after + 1 < static_cast<int>(r.points.size()) ? std::to_string(x.after + 1)
                                                                    : std::string("null"),

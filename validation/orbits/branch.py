@@ -56,10 +56,20 @@ def landing(end, rows):
                 "corrector lands on an orbit in free flight throughout "
                 f"(`{rows[-1]['events']}`)")
     m = re.search(r"has the events \[(.*?)\]", end["how"])
+    it = re.search(r"the corrector's iterate at ([-0-9.e+]+)", end["how"])
     return (f"the last smooth orbit at {last:.6f} rad/s (F_N >= "
             f"{float(rows[end['between'][0]]['F_N_min']):.3g} N); beyond it no corrector step "
-            f"converges, its iterate at {end['value']:.6f} rad/s being a motion in free flight "
-            f"throughout (`{m.group(1) if m else '?'}`)")
+            f"converges, its iterate at {float(it.group(1)) if it else float('nan'):.6f} rad/s "
+            f"being a motion in free flight throughout (`{m.group(1) if m else '?'}`)")
+
+
+def located(end, graze):
+    """The lift-off located by extrapolating F_N_min to zero (continuation.cpp), if it was."""
+    if "extrapolated to zero" not in end["how"]:
+        return "not located (no extrapolation from the last points)"
+    return (f"located by extrapolating the contact force's minimum to zero from the last smooth "
+            f"points at {end['value']:.7f} rad/s (its two estimates {end['spread']:.1e} rad/s "
+            f"apart), {end['value'] - graze:+.1e} rad/s from the closed form")
 
 
 def main():
@@ -130,7 +140,8 @@ def main():
         f"- end of the saddle branch: {landing(ends[0], rows)}: the free unbalance orbit, which "
         f"the saddle branch "
         f"meets where its contact force vanishes; closed form: the smaller root's N = 0 (the free "
-        f"orbit's amplitude equals the gap) at {graze:.6f} rad/s."
+        f"orbit's amplitude equals the gap) at {graze:.7f} rad/s. The lift-off "
+        f"{located(ends[0], graze)}."
         if ends else "- end: " + meta["outcome"],
         f"- stability along the branch: {stab.count('stable')} stable points "
         f"({'all' if before else 'NOT all'} before the fold), {stab.count('unstable')} unstable, "

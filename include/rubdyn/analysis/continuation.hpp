@@ -73,7 +73,10 @@ struct BranchSpecial {
   std::string kind;     ///< "fold", "period_doubling", "neimark_sacker", "events_change"
   int after = 0;        ///< between points `after` and `after + 1` (or beyond the last, `after`)
   double lambda = 0.0;  ///< located
-  std::string how;      ///< how it was detected and located
+  /// The located value's spread between two estimates (a lift-off's secant and parabola, see
+  /// `how`); 0: no such estimate
+  double spread = 0.0;
+  std::string how;  ///< how it was detected and located
 };
 
 struct Branch {
