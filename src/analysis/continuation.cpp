@@ -235,27 +235,26 @@ bool correct(const ModelFamily& family, const PointData& from, double s,
 }
 
 /// Where the contact force of an orbit in contact throughout its period reaches zero (a
-/// lift-off ahead of the branch's end), extrapolated from the last smooth points: the secant
-/// of F_N_min over lambda through the last two, and the parabola through the last three. True
-/// when the points allow it (all in contact, F_N_min falling towards the end), with `lambda` the
-/// parabola's root nearest the last point (the secant's with two points) and `spread` the two
-/// estimates' difference (0 with two points).
-bool extrapolate_liftoff(const std::vector<PointData>& pts, double& lambda, double& spread,
-                         std::string& how) {
+/// lift-off ahead of the branch's end), extrapolated from the last smooth points `pts`: the
+/// secant of F_N_min over lambda through the last two, and the parabola through the last three.
+/// Where the points allow it (all in contact, F_N_min falling towards the end), the special `s`
+/// that ends the branch takes the parabola's root nearest the last point (the secant's with two
+/// points) as its value, the two estimates' difference as its spread, and says so in `how`;
+/// else it is left as it is.
+void locate_liftoff(const std::vector<PointData>& pts, BranchSpecial& s) {
   const std::size_t n = std::min<std::size_t>(pts.size(), 3);
-  if (n < 2) return false;
+  if (n < 2) return;
   std::vector<double> l, F;
   for (std::size_t k = pts.size() - n; k < pts.size(); ++k) {
     const BranchPoint& p = pts[k].p;
-    if (!(p.F_N_min > 0.0) || !std::isfinite(p.F_N_min)) return false;
+    if (!(p.F_N_min > 0.0) || !std::isfinite(p.F_N_min)) return;
     l.push_back(p.lambda);
     F.push_back(p.F_N_min);
   }
   const std::size_t e = n - 1;
-  if (!(F[e] < F[e - 1]) || l[e] == l[e - 1]) return false;
+  if (!(F[e] < F[e - 1]) || l[e] == l[e - 1]) return;
   const double secant = l[e] - F[e] * (l[e] - l[e - 1]) / (F[e] - F[e - 1]);
-  lambda = secant;
-  spread = 0.0;
+  double lambda = secant, spread = 0.0;
   if (n == 3 && l[0] != l[1] && l[0] != l[2]) {
     // Newton's form of the parabola F(x) through the three, its root nearest l[e]
     const double d1 = (F[1] - F[0]) / (l[1] - l[0]), d2 = (F[2] - F[1]) / (l[2] - l[1]);
@@ -274,12 +273,13 @@ bool extrapolate_liftoff(const std::vector<PointData>& pts, double& lambda, doub
     spread = std::abs(root - secant);
     lambda = root;
   }
-  how = fmt::format(
+  s.lambda = lambda;
+  s.spread = spread;
+  s.how += fmt::format(
       "; the contact force's minimum over the period, {:.6g} N at the last point, extrapolated "
       "to zero from the last {} smooth points: lift-off at {:.10g} (secant {:.10g}, estimates "
       "{:.2g} apart)",
       F[e], n, lambda, secant, spread);
-  return true;
 }
 
 }  // namespace
@@ -355,13 +355,7 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
             "not smooth there (a grazing or a lift-off near these values), where the branch of "
             "smooth orbits ends",
             changed_lambda, changed_signature, cur.p.signature, opt.ds_min, cur.p.lambda);
-        double at = 0.0, spread = 0.0;
-        std::string how;
-        if (extrapolate_liftoff(pts, at, spread, how)) {
-          sp.lambda = at;
-          sp.spread = spread;
-          sp.how += how;
-        }
+        locate_liftoff(pts, sp);
         b.specials.push_back(sp);
         return done("events_change", sp.how);
       }
@@ -390,13 +384,7 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
       s.how = "the orbit's events are [" + next.p.signature + "] instead of [" + cur.p.signature +
               "]: a grazing or lift-off between the two points, where the branch of smooth "
               "orbits ends";
-      double at = 0.0, spread = 0.0;
-      std::string how;
-      if (extrapolate_liftoff(pts, at, spread, how)) {
-        s.lambda = at;
-        s.spread = spread;
-        s.how += how;
-      }
+      locate_liftoff(pts, s);
       next.p.arclength = cur.p.arclength + std::abs(ds);
       next.p.runs = runs - runs_before;
       b.points.push_back(next.p);
@@ -502,13 +490,7 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
       s.how = "the orbit's events are [" + p.signature + "] instead of [" + a.signature +
               "]: a grazing or lift-off between the two points, where the branch of smooth "
               "orbits ends";
-      double at = 0.0, spread = 0.0;
-      std::string how;
-      if (extrapolate_liftoff(pts, at, spread, how)) {  // (from the smooth points before it)
-        s.lambda = at;
-        s.spread = spread;
-        s.how += how;
-      }
+      locate_liftoff(pts, s);  // (from the smooth points before it)
       b.specials.push_back(s);
       pts.push_back(std::move(next));
       return done("events_change", s.how);

@@ -277,12 +277,17 @@ void MatrixModel::mass_matrix(VecIn q, MatOut M) const {
     if (nd.sprung()) M(nd.xs, nd.xs) = M(nd.ys, nd.ys) = nd.stator.mass;
 }
 
+bool MatrixModel::rotor_part_zero(const double* x) const {
+  for (int i = 0; i < n_; ++i)
+    if (x[i] != 0.0) return false;
+  return true;
+}
+
 void MatrixModel::mass_product(VecIn q, VecIn x, VecOut y) const {
   double ubs, ubc;
   unbalance_terms(q, ubs, ubc);
   double yth = p_.rotor.Jp * x[th_];
-  bool rotor_zero = true;  // (x = the spin's unit vector: a prescribed spin's M e_theta alpha)
-  for (int i = 0; i < n_ && rotor_zero; ++i) rotor_zero = x[i] == 0.0;
+  const bool rotor_zero = rotor_part_zero(x.data());  // (a prescribed spin's M e_theta alpha)
   for (int i = 0; i < n_; ++i) {
     const double bi = b(i, q, ubs, ubc);
     if (rotor_zero) {  // (the same values: M's row times zeros adds nothing)
@@ -344,10 +349,8 @@ bool MatrixModel::spin_row(double /*t*/, VecIn q, VecIn v, VecIn a, double& Ma, 
   const auto& L = p_.loads;
   double ubs, ubc;
   unbalance_terms(q, ubs, ubc);
-  bool rotor_zero = true;
-  for (int i = 0; i < n_ && rotor_zero; ++i) rotor_zero = a[i] == 0.0;
   Ma = p_.rotor.Jp * a[th_];
-  if (!rotor_zero)
+  if (!rotor_part_zero(a.data()))
     for (int i = 0; i < n_; ++i) Ma += b(i, q, ubs, ubc) * a[i];
   f = L.drive_torque(v[th_]);
   if (L.unbalance != 0.0) f -= L.gravity * ubc;
@@ -362,23 +365,16 @@ bool MatrixModel::newton_entries(double /*t*/, VecIn q, VecIn v, VecIn a, Newton
   const double om = v[th_], at = a[th_];
   double ubs, ubc;
   unbalance_terms(q, ubs, ubc);
-  // one envelope's entries, row i of A (env built from A) or of A^T (transposed)
-  const auto rows = [this](const Envelope& env, bool transposed, double c,
-                           std::vector<MatrixEntry>& out) {
+  // emit(i, j, value) for each entry of an envelope (row i of the matrix it was built from)
+  const auto each = [this](const Envelope& env, auto&& emit) {
     for (int i = 0; i < n_; ++i) {
       const auto k = static_cast<std::size_t>(i);
-      for (Eigen::Index j = 0; j < env.len[k]; ++j) {
-        const int col = static_cast<int>(env.lo[k] + j);
-        const double val = c * env.val[static_cast<std::size_t>(env.off[k] + j)];
-        if (transposed)
-          out.push_back({col, i, val});
-        else
-          out.push_back({i, col, val});
-      }
+      for (Eigen::Index j = 0; j < env.len[k]; ++j)
+        emit(i, static_cast<int>(env.lo[k] + j), env.val[static_cast<std::size_t>(env.off[k] + j)]);
     }
   };
-  // M: the rotor's, the spin's row and column b(q), Jp, the rings' masses
-  rows(Me_, true, 1.0, e.M);
+  // M: the rotor's (Me_ holds M^T's rows), the spin's row and column b(q), Jp, the rings' masses
+  each(Me_, [&](int i, int j, double x) { e.M.push_back({j, i, x}); });
   for (int i = 0; i < n_; ++i) {
     const double bi = b(i, q, ubs, ubc);
     e.M.push_back({i, th_, bi});
@@ -386,21 +382,18 @@ bool MatrixModel::newton_entries(double /*t*/, VecIn q, VecIn v, VecIn a, Newton
   }
   e.M.push_back({th_, th_, p_.rotor.Jp});
   // df/dq - d(M a)/dq: -K, the unbalance's terms, -G a_theta / 2 and the spin's row -(G^T a)/2
-  rows(Ke_, false, -1.0, e.dq);
-  rows(Ge_, false, -0.5 * at, e.dq);
-  for (int i = 0; i < n_; ++i) {
-    const auto k = static_cast<std::size_t>(i);
-    for (Eigen::Index j = 0; j < Ge_.len[k]; ++j) {
-      const int col = static_cast<int>(Ge_.lo[k] + j);
-      e.dq.push_back({th_, col, -0.5 * Ge_.val[static_cast<std::size_t>(Ge_.off[k] + j)] * a[i]});
-    }
-  }
+  each(Ke_, [&](int i, int j, double x) { e.dq.push_back({i, j, -x}); });
+  const double cg = -0.5 * at;
+  each(Ge_, [&](int i, int j, double x) {
+    e.dq.push_back({i, j, cg * x});
+    e.dq.push_back({th_, j, -0.5 * x * a[i]});
+  });
   e.dq.push_back({ix_, th_, ubc * at});
   e.dq.push_back({iy_, th_, ubs * at});
   e.dq.push_back({th_, th_, ubc * a[ix_] + ubs * a[iy_]});
   // df/dv: -C - Omega G, the spin's column -G v, the torque's slope
-  rows(Ce_, false, -1.0, e.dv);
-  rows(Ge_, false, -om, e.dv);
+  each(Ce_, [&](int i, int j, double x) { e.dv.push_back({i, j, -x}); });
+  each(Ge_, [&](int i, int j, double x) { e.dv.push_back({i, j, -om * x}); });
   for (int i = 0; i < n_; ++i) e.dv.push_back({i, th_, -Ge_.dot(i, v.data())});
   e.dv.push_back({th_, th_, L.drive_torque_slope()});
   if (L.unbalance != 0.0) {

@@ -184,6 +184,8 @@ class MatrixModel final : public LagrangianModel {
   /// x = M_rotor^-1 x for a right-hand side x (n) from the contact nodes' unit solves when its
   /// nonzeros are all on them, else by the envelope solve; `tmp`: n of scratch.
   void solve_rotor_rhs(double* x, double* tmp) const;
+  /// x's rotor part (its first n entries) is all zeros: a product with M's rows adds nothing.
+  bool rotor_part_zero(const double* x) const;
 
   struct Node {
     int ix = 0, iy = 1, xs = -1, ys = -1;
