@@ -201,7 +201,7 @@ py::tuple run_case(const Case& c, const py::object& progress, double progress_in
     throw py::error_already_set();
   }
   const std::unique_ptr<LagrangianModel> model = build_model(c.spec);
-  return py::make_tuple(series_dict(series_table(*model, sink.samples)),
+  return py::make_tuple(series_dict(series_table(*model, sink.samples, c.spec.output.coordinates)),
                         event_columns_of(sink.events, model->contact_count()),
                         summary_json(summary));
 }
@@ -248,7 +248,8 @@ py::tuple orbit_case(const Case& c, int periods, int settle, double tol, int max
     throw py::error_already_set();
   }
   const FlowRun& run = r.result.orbit;
-  return py::make_tuple(orbit_json(c.spec, r), series_dict(series_table(*r.model, run.samples)),
+  return py::make_tuple(orbit_json(c.spec, r),
+                        series_dict(series_table(*r.model, run.samples, c.spec.output.coordinates)),
                         event_columns_of(run.events, r.model->contact_count()),
                         summary_json(run.summary), Mat(r.result.monodromy.M), exit_code(r.result));
 }
@@ -317,19 +318,23 @@ RunRecord record_of_columns(const Case& c, const py::dict& columns, const std::s
   r.dir = source;  // names the samples in messages
   r.spec = c.spec;
   const std::unique_ptr<LagrangianModel> model = build_model(c.spec);
-  r.samples.assign(n, Sample(model->num_dofs(), model->contact_count(),
-                             static_cast<int>(model->observables().size())));
-  for (const SampleColumn& sc : timeseries_columns(*model)) {
+  // the columns the case writes (output.coordinates); a coordinate it does not write is NaN
+  SeriesTable tab;
+  tab.columns = timeseries_columns(*model, c.spec.output.coordinates);
+  for (const SampleColumn& sc : tab.columns) {
     const auto a = col(sc.name.c_str());
     if (static_cast<std::size_t>(a.size()) != n)
       throw py::value_error("column " + sc.name + " is not as long as t");
-    try {
-      for (std::size_t i = 0; i < n; ++i)
-        set_sample_value(r.samples[i], sc, a.at(static_cast<py::ssize_t>(i)));
-    } catch (const std::invalid_argument& e) {
-      throw py::value_error(e.what());
-    }
+    std::vector<double> v(n);
+    for (std::size_t i = 0; i < n; ++i) v[i] = a.at(static_cast<py::ssize_t>(i));
+    tab.values.push_back(std::move(v));
   }
+  try {
+    r.samples = samples_of(*model, tab);
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  }
+  r.every_coordinate = writes_every_coordinate(*model, c.spec.output.coordinates);
   return r;
 }
 
@@ -521,11 +526,12 @@ PYBIND11_MODULE(_core, m) {
           "columns",
           [](const Case& c) {
             std::vector<std::string> names;
-            for (const auto& sc : timeseries_columns(*build_model(c.spec)))
+            for (const auto& sc :
+                 timeseries_columns(*build_model(c.spec), c.spec.output.coordinates))
               names.push_back(sc.name);
             return names;
           },
-          "timeseries.csv's columns for this case's model")
+          "timeseries.csv's columns for this case (its model, output.coordinates)")
       .def_property_readonly("output_folder", [](const Case& c) { return output_folder(c.spec); })
       .def(
           "to_toml", [](const Case& c) { return to_toml(c.spec); },

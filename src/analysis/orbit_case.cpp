@@ -231,8 +231,8 @@ std::string orbit_json(const CaseSpec& spec, const CaseOrbit& o) {
   return s;
 }
 
-std::string orbit_csv(const CaseOrbit& o) {
-  const auto cols = timeseries_columns(*o.model);
+std::string orbit_csv(const CaseOrbit& o, std::string_view selection) {
+  const auto cols = timeseries_columns(*o.model, selection);
   std::string s;
   for (std::size_t i = 0; i < cols.size(); ++i) s += (i ? "," : "") + cols[i].name;
   s += '\n';
@@ -278,7 +278,8 @@ std::unique_ptr<HeldFolder> open_orbit_folder(const std::string& dir, const Case
 
 void write_orbit_files(const HeldFolder& folder, const CaseSpec& spec, const CaseOrbit& o) {
   const std::string& dir = folder.path();
-  write_file_at(folder.fd(), "orbit.csv", dir + "/orbit.csv", orbit_csv(o));
+  write_file_at(folder.fd(), "orbit.csv", dir + "/orbit.csv",
+                orbit_csv(o, spec.output.coordinates));
   write_file_at(folder.fd(), "orbit.json", dir + "/orbit.json", orbit_json(spec, o));
 }
 

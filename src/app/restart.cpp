@@ -45,8 +45,17 @@ std::vector<std::string> restart_overrides(const std::string& from,
                         "case.resolved.toml is one)",
                         r.spec.model, theirs, plain->model, ours)}});
   }
-  if (r.samples.empty()) throw std::runtime_error("--from " + from + ": no samples to start from");
-  const Sample* s = &r.samples.back();
+  // a run that wrote a selection of its coordinates (output.coordinates) restarts from the
+  // full states of its state.csv: its first sample, after each event, its last sample
+  const std::vector<Sample>& rows = r.every_coordinate ? r.samples : r.states;
+  const std::string file = r.every_coordinate ? "timeseries.csv" : "state.csv";
+  if (rows.empty())
+    throw std::runtime_error("--from " + from + ": no samples to start from" +
+                             (r.every_coordinate
+                                  ? std::string()
+                                  : " (its timeseries.csv holds a selection of "
+                                    "the coordinates, and state.csv no full state)"));
+  const Sample* s = &rows.back();
   if (at) {
     char* end = nullptr;
     const double T = std::strtod(at->c_str(), &end);
@@ -56,18 +65,24 @@ std::vector<std::string> restart_overrides(const std::string& from,
     // by a few ulps: 1e-12 relative matches them and no two distinct samples
     const double tol = 1e-12 * std::max(1.0, std::abs(T));
     s = nullptr;
-    for (const auto& x : r.samples)
+    for (const auto& x : rows)
       if (std::abs(x.t - T) <= tol) s = &x;
     if (!s) {
       const Sample* before = nullptr;
-      for (const auto& x : r.samples)
+      for (const auto& x : rows)
         if (x.t < T) before = &x;
       throw CaseError(
           {{"command line", 0, "--at", *at,
-            fmt::format("no sample of {} at this time (samples from {:.17g} to {:.17g} s{})", from,
-                        r.samples.front().t, r.samples.back().t,
+            fmt::format("no sample of {}/{} at this time (samples from {:.17g} to {:.17g} s{}{})",
+                        from, file, rows.front().t, rows.back().t,
                         before ? fmt::format("; the last before it is at {:.17g} s", before->t)
-                               : std::string())}});
+                               : std::string(),
+                        r.every_coordinate
+                            ? std::string()
+                            : "; the run wrote a selection of its coordinates "
+                              "(output.coordinates), so it restarts from the full states of "
+                              "state.csv: its first sample, the sample after each event and "
+                              "its last")}});
     }
   } else if (!r.complete) {
     std::fprintf(stderr,

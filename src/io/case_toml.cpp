@@ -448,6 +448,7 @@ void run_solver_output_keys(SchemaBuilder& b) {
   b.num("output", "dt", false, [](CaseSpec& c) { return &c.output.dt; });
   b.integer("output", "every", [](CaseSpec& c) { return &c.output.every; });
   b.text("output", "folder", [](CaseSpec& c) { return &c.output.folder; });
+  b.text("output", "coordinates", [](CaseSpec& c) { return &c.output.coordinates; });
 }
 
 /// Every key of a case of c's model with c's flags (stator.rigid, loads.spin, loads.torque_law),
@@ -672,6 +673,8 @@ class Loader {
     const std::size_t n = initial_coordinates_or_none(c);
     c.initial.q0 = Vec::Zero(static_cast<Eigen::Index>(n));
     c.initial.v0 = Vec::Zero(static_cast<Eigen::Index>(n));
+    // a wide model writes its contacts' and spin's coordinates unless told otherwise
+    c.output.coordinates = default_output_coordinates(n);
     check_structure(doc, c, keys);
     read_values(doc, c, keys);
     // Rules run even when other keys have problems, so that every problem is reported at once.
@@ -1145,6 +1148,15 @@ class Loader {
     load_rules(c);
     const bool model_valid = issues_.size() == before && buildable_;
     common_rules(c);
+    // output.coordinates names coordinates of the model (io/columns.hpp)
+    if (model_known_) {
+      const std::string why =
+          output_coordinates_problem(c.output.coordinates, initial_coordinates(c));
+      if (!why.empty()) {
+        const toml::node* n = at("output.coordinates");
+        issue("output.coordinates", n, n ? node_text(*n) : "\"" + c.output.coordinates + "\"", why);
+      }
+    }
     // The initial state must not penetrate the stator (d_N >= 0 at every contact), checked on
     // the model itself once its parameters are valid. A state on the constraint written by a
     // run (17 significant digits) gives d_N within round-off of 0, of either sign: touching.

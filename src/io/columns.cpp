@@ -1,7 +1,10 @@
 #include "rubdyn/io/columns.hpp"
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -45,6 +48,81 @@ std::vector<SampleColumn> timeseries_columns(const std::vector<Coordinate>& coor
 
 std::vector<SampleColumn> timeseries_columns(const LagrangianModel& m) {
   return timeseries_columns(m.coordinates(), m.observables(), m.contact_count());
+}
+
+std::vector<std::string> output_coordinate_words(std::string_view selection) {
+  std::vector<std::string> words;
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t comma = selection.find(',', start);
+    std::string_view w = selection.substr(
+        start, comma == std::string_view::npos ? std::string_view::npos : comma - start);
+    const auto a = w.find_first_not_of(" \t"), b = w.find_last_not_of(" \t");
+    words.emplace_back(a == std::string_view::npos ? std::string_view() : w.substr(a, b - a + 1));
+    if (comma == std::string_view::npos) break;
+    start = comma + 1;
+  }
+  return words;
+}
+
+std::string output_coordinates_problem(std::string_view selection,
+                                       const std::vector<Coordinate>& coords) {
+  const std::vector<std::string> words = output_coordinate_words(selection);
+  if (words.size() == 1 && words.front() == "all") return "";
+  for (const std::string& w : words) {
+    if (w.empty())
+      return "must be \"all\", or a comma-separated list of coordinate names and the word "
+             "\"contacts\" (an empty word)";
+    if (w == "all")
+      return "\"all\" stands alone (every coordinate); a list names the coordinates written "
+             "besides those of the contacts and the spin";
+    if (w == "contacts" || find_coordinate(coords, w) >= 0) continue;
+    std::string names;
+    for (std::size_t i = 0; i < coords.size() && i < 12; ++i)
+      names += (i ? ", " : "") + coords[i].name;
+    if (coords.size() > 12) names += fmt::format(", ... ({} in all)", coords.size());
+    return fmt::format(
+        "'{}' is no coordinate of the model (its coordinates: {}); the words are \"all\" alone, "
+        "or coordinate names and \"contacts\"",
+        w, names);
+  }
+  return "";
+}
+
+bool writes_every_coordinate(const LagrangianModel& m, std::string_view selection) {
+  return written_coordinates(m, selection).size() == m.coordinates().size();
+}
+
+std::vector<int> written_coordinates(const LagrangianModel& m, std::string_view selection) {
+  const auto& coords = m.coordinates();
+  const int n = static_cast<int>(coords.size());
+  std::vector<char> keep(coords.size(), 0);
+  const std::vector<std::string> words = output_coordinate_words(selection);
+  const bool all = words.size() == 1 && words.front() == "all";
+  for (int i = 0; i < n; ++i)
+    keep[static_cast<std::size_t>(i)] =
+        all || coords[static_cast<std::size_t>(i)].role != CoordinateRole::Other;
+  if (!all)
+    for (const std::string& w : words)
+      if (const int i = find_coordinate(coords, w); i >= 0) keep[static_cast<std::size_t>(i)] = 1;
+  std::vector<int> out;
+  for (int i = 0; i < n; ++i)
+    if (keep[static_cast<std::size_t>(i)]) out.push_back(i);
+  return out;
+}
+
+std::vector<SampleColumn> timeseries_columns(const LagrangianModel& m, std::string_view selection) {
+  std::vector<SampleColumn> all = timeseries_columns(m);
+  const std::vector<int> written = written_coordinates(m, selection);
+  if (written.size() == m.coordinates().size()) return all;
+  std::vector<char> keep(m.coordinates().size(), 0);
+  for (int i : written) keep[static_cast<std::size_t>(i)] = 1;
+  std::vector<SampleColumn> out;
+  for (auto& c : all) {
+    const bool coordinate = c.field == SampleField::Position || c.field == SampleField::Velocity;
+    if (!coordinate || keep[static_cast<std::size_t>(c.index)]) out.push_back(std::move(c));
+  }
+  return out;
 }
 
 double sample_value(const Sample& s, const SampleColumn& c) {
@@ -91,14 +169,27 @@ void set_sample_value(Sample& s, const SampleColumn& c, double x) {
   }
 }
 
-SeriesTable series_table(const LagrangianModel& m, const std::vector<Sample>& samples) {
+SeriesTable series_table(const LagrangianModel& m, const std::vector<Sample>& samples,
+                         std::string_view selection) {
   SeriesTable t;
-  t.columns = timeseries_columns(m);
+  t.columns = timeseries_columns(m, selection);
   t.values.assign(t.columns.size(), std::vector<double>(samples.size()));
   for (std::size_t c = 0; c < t.columns.size(); ++c)
     for (std::size_t i = 0; i < samples.size(); ++i)
       t.values[c][i] = sample_value(samples[i], t.columns[c]);
   return t;
+}
+
+std::vector<Sample> samples_of(const LagrangianModel& m, const SeriesTable& t) {
+  const std::size_t n = t.rows();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  Sample blank(m.num_dofs(), m.contact_count(), static_cast<int>(m.observables().size()));
+  blank.q.setConstant(nan);  // a coordinate the table lacks: not written, not zero
+  blank.v.setConstant(nan);
+  std::vector<Sample> out(n, blank);
+  for (std::size_t c = 0; c < t.columns.size(); ++c)
+    for (std::size_t i = 0; i < n; ++i) set_sample_value(out[i], t.columns[c], t.values[c][i]);
+  return out;
 }
 
 bool parse_phase(std::string_view word, Phase& out) {

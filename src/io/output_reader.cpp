@@ -180,10 +180,10 @@ void split_plain(const std::string& line, std::vector<std::string_view>& out) {
   }
 }
 
-SeriesTable read_series(const std::string& path, const LagrangianModel& model,
+SeriesTable read_series(const std::string& path, std::vector<SampleColumn> columns,
                         std::vector<std::string>& warnings) {
   SeriesTable t;
-  t.columns = timeseries_columns(model);
+  t.columns = std::move(columns);
   t.values.assign(t.columns.size(), {});
   std::vector<int> at(t.columns.size(), -1);
   std::size_t width = 0;
@@ -288,7 +288,13 @@ RunFiles read_run_files(const std::string& dir) {
   if (!fs::exists(case_path)) throw ReadError(case_path, 0, "missing");
   r.spec = load_case(case_path);
   r.model = build_model(r.spec);
-  r.series = read_series((fs::path(dir) / "timeseries.csv").string(), *r.model, r.warnings);
+  r.series = read_series((fs::path(dir) / "timeseries.csv").string(),
+                         timeseries_columns(*r.model, r.spec.output.coordinates), r.warnings);
+  // the full states of a run that wrote a selection of its coordinates (absent after a run
+  // killed before it opened the file: then no state to restart from)
+  const std::string st_path = (fs::path(dir) / "state.csv").string();
+  if (!writes_every_coordinate(*r.model, r.spec.output.coordinates) && fs::exists(st_path))
+    r.states = read_series(st_path, timeseries_columns(*r.model), r.warnings);
   const std::string ev_path = (fs::path(dir) / "events.csv").string();
   if (fs::exists(ev_path)) r.events = read_events(ev_path, r.model->contact_count(), r.warnings);
   const fs::path sj = fs::path(dir) / "summary.json";
@@ -322,14 +328,9 @@ RunRecord read_run(const std::string& dir) {
   r.events = static_cast<long>(f.events.size());
   r.complete = f.complete;
   r.warnings = std::move(f.warnings);
-  const LagrangianModel* model = f.model.get();
-  const SeriesTable& t = f.series;
-  const std::size_t n = t.rows();
-  r.samples.assign(n, Sample(model->num_dofs(), model->contact_count(),
-                             static_cast<int>(model->observables().size())));
-  for (std::size_t c = 0; c < t.columns.size(); ++c)
-    for (std::size_t i = 0; i < n; ++i)
-      set_sample_value(r.samples[i], t.columns[c], t.values[c][i]);
+  r.every_coordinate = writes_every_coordinate(*f.model, r.spec.output.coordinates);
+  r.samples = samples_of(*f.model, f.series);
+  r.states = samples_of(*f.model, f.states);
   return r;
 }
 

@@ -58,8 +58,9 @@ CaseOrbit find_case_orbit(const CaseSpec& spec, const CaseOrbitOptions& o);
 std::string orbit_json(const CaseSpec& spec, const CaseOrbit& o);
 
 /// orbit.csv's text: the final run over one period, in timeseries.csv's columns
-/// (io/columns.hpp), one row per sample (the orbit's output grid and both sides of each event).
-std::string orbit_csv(const CaseOrbit& o);
+/// (io/columns.hpp; those output.coordinates = `selection` writes: orbit.json's state holds
+/// every coordinate), one row per sample (the orbit's output grid and both sides of each event).
+std::string orbit_csv(const CaseOrbit& o, std::string_view selection = "all");
 
 /// Creates, locks and prepares the output folder of an orbit (or a branch) before the search:
 /// checks that it can be written, removes an earlier search's result files (`files`; they would

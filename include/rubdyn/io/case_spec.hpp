@@ -63,6 +63,11 @@ struct OutputOptions {
   double dt = 1e-4;    ///< output interval [s] (dense output, never changes the steps taken)
   int every = 0;       ///< fixed-step schemes: write every N-th step (0: use dt)
   std::string folder;  ///< output folder (empty: out/<case name>)
+  /// The coordinates timeseries.csv holds: "all", or a comma-separated list of coordinate names
+  /// and the word "contacts" (the contacts' and the spin's coordinates are always written; the
+  /// full state then goes to state.csv at the run's first sample, its events and its end):
+  /// io/columns.hpp. Default: "all" up to 64 coordinates, "contacts" above (a wide model).
+  std::string coordinates = "all";
 };
 
 /// [rotor] of kind "matrices": the files of the user's matrices, as given in the case file

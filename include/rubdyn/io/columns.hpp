@@ -48,6 +48,44 @@ std::vector<SampleColumn> timeseries_columns(const std::vector<Coordinate>& coor
                                              int contacts);
 std::vector<SampleColumn> timeseries_columns(const LagrangianModel& m);
 
+// ---- which coordinates a run writes (output.coordinates) -------------------------------------
+// A wide model (a finite-element rotor of hundreds of coordinates) need not write every one:
+// output.coordinates is "all" (the default), or a comma-separated list of words, each a
+// coordinate's name or "contacts". The coordinates that have a role (coordinates.hpp: the spin,
+// the contact planes' rotor and stator centres, the bearings: what the analysis, the plots and
+// compare read) are always written; the names add others. The model's observables and the
+// contact columns are always written. The columns keep the model's order, whatever the list's.
+// A run that does not write every coordinate writes the full state to state.csv (the
+// timeseries' format with every coordinate) at its first sample, after each event and at its
+// last sample: what `--from` restarts read.
+
+/// Models of more coordinates than this are wide: output.coordinates defaults to "contacts"
+/// (a 400-coordinate rotor would write 800 columns nobody reads), "all" up to it (every
+/// built-in rigid model, the paper's and FE rotors up to 15 nodes).
+inline constexpr std::size_t kWideModelCoordinates = 64;
+/// output.coordinates when the case does not give it, for a case of n coordinates.
+inline const char* default_output_coordinates(std::size_t n) {
+  return n > kWideModelCoordinates ? "contacts" : "all";
+}
+
+/// The words of an output.coordinates value (split at commas, blanks trimmed; empty words kept,
+/// for the validator to name).
+std::vector<std::string> output_coordinate_words(std::string_view selection);
+/// The problem with an output.coordinates value for a case whose coordinates are `coords`
+/// (the [initial] coordinates: a prescribed spin's theta included), or "" when it is valid:
+/// "all" alone, otherwise each word "contacts" or one of the coordinates' names.
+std::string output_coordinates_problem(std::string_view selection,
+                                       const std::vector<Coordinate>& coords);
+/// Whether `selection` writes every coordinate of `m`.
+bool writes_every_coordinate(const LagrangianModel& m, std::string_view selection);
+/// The coordinates of `m` that a run with this output.coordinates writes (ascending indices):
+/// those with a role and those named (a name that is no coordinate of m, e.g. the spin angle of
+/// a prescribed spin, which is an observable of m, adds nothing).
+std::vector<int> written_coordinates(const LagrangianModel& m, std::string_view selection);
+/// timeseries.csv's columns for a run of `m` with this output.coordinates: timeseries_columns(m)
+/// without the positions and rates of the coordinates it does not write.
+std::vector<SampleColumn> timeseries_columns(const LagrangianModel& m, std::string_view selection);
+
 /// A column's value in a sample, as a number (Phase: its code, the Phase enum value).
 double sample_value(const Sample& s, const SampleColumn& c);
 /// Sets a column's value in a sample (the inverse of sample_value). A Phase value must be a
@@ -62,8 +100,14 @@ struct SeriesTable {
   std::vector<std::vector<double>> values;  ///< values[c][row]
   std::size_t rows() const { return values.empty() ? 0 : values.front().size(); }
 };
-/// The samples of a run of `m` as a SeriesTable.
-SeriesTable series_table(const LagrangianModel& m, const std::vector<Sample>& samples);
+/// The samples of a run of `m` as a SeriesTable (of the columns output.coordinates =
+/// `selection` writes).
+SeriesTable series_table(const LagrangianModel& m, const std::vector<Sample>& samples,
+                         std::string_view selection = "all");
+/// Samples from a SeriesTable of `m`'s columns (the inverse of series_table): the positions and
+/// rates of the coordinates the table lacks are NaN, every other field of a sample its column's
+/// value. Throws std::invalid_argument for a phase column whose value is no phase code.
+std::vector<Sample> samples_of(const LagrangianModel& m, const SeriesTable& t);
 
 /// What an events column holds.
 enum class EventField { Time, Kind, PhaseBefore, PhaseAfter, Number, Text, Contact };

@@ -6,6 +6,9 @@
 //                    v_t_plus, P_N, P_T, F_N, F_T, t_accumulation, witness, note
 //   summary.json     every field of RunSummary, plus "complete": true|false
 //   case.resolved.toml  the case with every default and override filled in
+//   state.csv        only when output.coordinates does not write every coordinate: the full
+//                    state (timeseries.csv's columns with every coordinate) at the run's first
+//                    sample, the first sample after each event and its last sample (restarts)
 // Rows are streamed (and flushed at events), so a run that ends early keeps what it wrote; its
 // summary.json says "complete": false with the termination and message. The CSV headers are
 // flushed at once, so even a killed run leaves files that the readers accept.
@@ -134,6 +137,10 @@ class OutputFolder final : public OutputSink {
  private:
   void failed(const std::string& file);
   void check_folder();
+  /// Formats a sample's row of these columns into buf_.
+  void format_row(const Sample& s, const std::vector<SampleColumn>& columns);
+  /// Writes s to state.csv (when the run writes one).
+  void state_row(const Sample& s);
   std::string dir_;
   std::unique_ptr<HeldFolder> folder_;
   std::vector<SampleColumn> columns_;       // timeseries.csv (io/columns.hpp)
@@ -142,6 +149,13 @@ class OutputFolder final : public OutputSink {
   std::string buf_;  // one row
   std::FILE* ts_ = nullptr;
   std::FILE* ev_ = nullptr;
+  // state.csv: the full state where timeseries.csv holds a selection of the coordinates
+  std::vector<SampleColumn> state_columns_;  // every coordinate (empty: no state.csv)
+  std::FILE* st_ = nullptr;
+  bool state_next_ = true;      // the next sample goes to state.csv (the first, after an event)
+  bool last_in_state_ = false;  // the last sample received is in state.csv
+  Sample last_;                 // the last sample received (written at the end)
+  bool have_last_ = false;
   int since_check_ = 0;
   std::atomic<bool>* stop_ = nullptr;
   std::string error_;

@@ -66,7 +66,10 @@ struct RunFiles {
   CaseSpec spec;                                 ///< case.resolved.toml
   std::shared_ptr<const LagrangianModel> model;  ///< built from spec: its column tables
   SeriesTable series;                 ///< timeseries.csv, by name (a column of the table that
-                                      ///< the file lacks is an error, others are ignored)
+                                      ///< the file lacks is an error, others are ignored): the
+                                      ///< columns the case's output.coordinates writes
+  SeriesTable states;                 ///< state.csv (every column) of a run that wrote a
+                                      ///< selection of its coordinates; no rows otherwise
   std::vector<EventRecord> events;    ///< events.csv (none if absent or header-only)
   std::string summary_json;           ///< summary.json as written (empty: absent)
   bool complete = true;               ///< summary.json "complete" (false: ended early or absent)
@@ -83,7 +86,10 @@ RunFiles read_run_files(const std::string& dir);
 struct RunRecord {
   std::string dir;
   CaseSpec spec;                      ///< case.resolved.toml
-  std::vector<Sample> samples;        ///< timeseries.csv, in file order
+  std::vector<Sample> samples;        ///< timeseries.csv, in file order (a coordinate that the
+                                      ///< run did not write: NaN)
+  bool every_coordinate = true;       ///< timeseries.csv holds every coordinate
+  std::vector<Sample> states;         ///< state.csv's full states (when !every_coordinate)
   long events = 0;                    ///< rows of events.csv (0 if absent)
   bool complete = true;               ///< summary.json "complete" (false: ended early or absent)
   std::vector<std::string> warnings;  ///< what the reader tolerated (the CLI prints them)
