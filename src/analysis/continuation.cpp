@@ -38,6 +38,7 @@ struct PointData {
 struct Eval {
   bool ok = false;
   std::string why;
+  bool penetrates = false;  // the state lies inside a stator (beyond a grazing): not run
   FlowRun run;
   std::string signature;  // the run's events (event_signature)
   Vec G;                  // coords(P(x)) - coords(x)
@@ -59,6 +60,15 @@ Eval evaluate(const ModelFamily& family, const SectionChart& chart, VecIn xi, do
         fmt::format("the state could not be put on the section's constraints at {:.10g}", lambda);
     return e;
   }
+  // an iterate beyond a grazing of the free orbits it continues lies inside the stator: the
+  // switching surface is crossed, as when an iterate's events change
+  if (const auto pen = penetrates_open_contact(*pm.model, chart, pm.t0, x)) {
+    e.penetrates = true;
+    e.signature =
+        fmt::format("inside contact {}'s stator, d_N = {:.3g} m", pen->contact + 1, pen->d_N);
+    e.why = fmt::format("the state at {:.10g} lies {}", lambda, e.signature);
+    return e;
+  }
   const PeriodMap map(*pm.model, pm.t0, pm.options);
   e.run = map.run(x, pm.period);
   ++runs;
@@ -72,6 +82,35 @@ Eval evaluate(const ModelFamily& family, const SectionChart& chart, VecIn xi, do
         chart.coords(stacked_state(e.run.samples.front()));
   e.ok = true;
   return e;
+}
+
+/// Contact 1's smallest gap over a sampled period (samples on a uniform grid from t0 to t0 + T,
+/// the last the first's state again; both sides of an event where there are events): the
+/// smallest sample's gap, refined where it is a strict local minimum between its grid
+/// neighbours (the period wrapping around) by the vertex of the parabola through the three. The
+/// gap is smooth in free flight, so the vertex is the minimum to O(dt^4) where a sample is off
+/// by O(dt^2): what locating a grazing from the branch's last free orbits needs.
+double smallest_gap(const std::vector<Sample>& s) {
+  const std::size_t n = s.size();
+  if (n == 0) return 0.0;
+  std::size_t i = 0;
+  for (std::size_t k = 1; k < n; ++k)
+    if (s[k].contacts[0].d_N < s[i].contacts[0].d_N) i = k;
+  const double y1 = s[i].contacts[0].d_N;
+  // the neighbours on the grid: the first and the last sample are one state (wrap past them)
+  if (n < 4) return y1;
+  const std::size_t prev = i == 0 ? n - 2 : i - 1, next = i + 1 < n ? i + 1 : 1;
+  const auto grid = [&](std::size_t a, std::size_t b) {  // b one grid step after a
+    const double dt = s[1].t - s[0].t;
+    double d = s[b].t - s[a].t;
+    if (d < 0) d += s[n - 1].t - s[0].t;
+    return std::abs(d - dt) <= 1e-9 * std::abs(dt);
+  };
+  if (!grid(prev, i) || !grid(i, next)) return y1;  // (an event's rows: not a grid)
+  const double y0 = s[prev].contacts[0].d_N, y2 = s[next].contacts[0].d_N;
+  const double curv = y0 - 2.0 * y1 + y2;
+  if (!(y0 > y1 && y2 > y1 && curv > 0.0)) return y1;
+  return y1 - (y2 - y0) * (y2 - y0) / (8.0 * curv);
 }
 
 /// Everything about the orbit through x at lambda (x on its section's constraints).
@@ -151,6 +190,7 @@ bool make_point(const ModelFamily& family, double lambda, VecIn x, const Continu
     p.F_N_max = std::max(p.F_N_max, s.contacts[0].F_N);
     p.F_N_min = std::min(p.F_N_min, s.contacts[0].F_N);
   }
+  p.d_N_min = smallest_gap(sampled.samples);
   return true;
 }
 
@@ -200,6 +240,11 @@ bool correct(const ModelFamily& family, const PointData& from, double s,
   for (int it = 0; it < opt.max_corrector; ++it) {
     Eval e = evaluate(family, chart, u.head(d), u(d) * opt.lambda_scale, runs);
     if (!e.ok) {
+      if (e.penetrates && !out.events_changed) {
+        out.events_changed = true;
+        out.changed_lambda = u(d) * opt.lambda_scale;
+        out.changed_signature = e.signature;
+      }
       why = e.why;
       return false;
     }
@@ -234,22 +279,30 @@ bool correct(const ModelFamily& family, const PointData& from, double s,
   return false;
 }
 
-/// Where the contact force of an orbit in contact throughout its period reaches zero (a
-/// lift-off ahead of the branch's end), extrapolated from the last smooth points `pts`: the
-/// secant of F_N_min over lambda through the last two, and the parabola through the last three.
-/// Where the points allow it (all in contact, F_N_min falling towards the end), the special `s`
-/// that ends the branch takes the parabola's root nearest the last point (the secant's with two
-/// points) as its value, the two estimates' difference as its spread, and says so in `how`;
-/// else it is left as it is.
-void locate_liftoff(const std::vector<PointData>& pts, BranchSpecial& s) {
+/// Where a smooth branch meets a switching surface, extrapolated from its last smooth points
+/// `pts` (up to three): a lift-off where its orbits are in contact throughout their period (the
+/// contact force's minimum over the period, F_N_min, falls towards zero), a grazing where they are
+/// free throughout (the gap's minimum over the period, d_N_min, falls towards zero). The secant of
+/// that minimum over lambda through the last two points, and the parabola through the last three;
+/// the special `s` that ends the branch takes the parabola's root nearest the last point (the
+/// secant's with two points) as its value, the two estimates' difference as its spread, and says
+/// so in `how`. Where the points allow neither (mixed, or the minimum not falling), `s` is left
+/// as it is.
+void locate_end(const std::vector<PointData>& pts, BranchSpecial& s) {
   const std::size_t n = std::min<std::size_t>(pts.size(), 3);
   if (n < 2) return;
-  std::vector<double> l, F;
+  // which quantity: every point in contact at every sample, or every point free at every one
+  bool contact = true, free = true;
   for (std::size_t k = pts.size() - n; k < pts.size(); ++k) {
     const BranchPoint& p = pts[k].p;
-    if (!(p.F_N_min > 0.0) || !std::isfinite(p.F_N_min)) return;
-    l.push_back(p.lambda);
-    F.push_back(p.F_N_min);
+    contact = contact && p.F_N_min > 0.0 && std::isfinite(p.F_N_min);
+    free = free && p.F_N_max == 0.0 && p.d_N_min > 0.0 && std::isfinite(p.d_N_min);
+  }
+  if (!contact && !free) return;
+  std::vector<double> l, F;
+  for (std::size_t k = pts.size() - n; k < pts.size(); ++k) {
+    l.push_back(pts[k].p.lambda);
+    F.push_back(contact ? pts[k].p.F_N_min : pts[k].p.d_N_min);
   }
   const std::size_t e = n - 1;
   if (!(F[e] < F[e - 1]) || l[e] == l[e - 1]) return;
@@ -276,10 +329,10 @@ void locate_liftoff(const std::vector<PointData>& pts, BranchSpecial& s) {
   s.lambda = lambda;
   s.spread = spread;
   s.how += fmt::format(
-      "; the contact force's minimum over the period, {:.6g} N at the last point, extrapolated "
-      "to zero from the last {} smooth points: lift-off at {:.10g} (secant {:.10g}, estimates "
-      "{:.2g} apart)",
-      F[e], n, lambda, secant, spread);
+      "; the {}'s minimum over the period, {:.6g} {} at the last point, extrapolated to zero "
+      "from the last {} smooth points: {} at {:.10g} (secant {:.10g}, estimates {:.2g} apart)",
+      contact ? "contact force" : "gap", F[e], contact ? "N" : "m", n,
+      contact ? "lift-off" : "grazing", lambda, secant, spread);
 }
 
 }  // namespace
@@ -355,7 +408,7 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
             "not smooth there (a grazing or a lift-off near these values), where the branch of "
             "smooth orbits ends",
             changed_lambda, changed_signature, cur.p.signature, opt.ds_min, cur.p.lambda);
-        locate_liftoff(pts, sp);
+        locate_end(pts, sp);
         b.specials.push_back(sp);
         return done("events_change", sp.how);
       }
@@ -384,7 +437,7 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
       s.how = "the orbit's events are [" + next.p.signature + "] instead of [" + cur.p.signature +
               "]: a grazing or lift-off between the two points, where the branch of smooth "
               "orbits ends";
-      locate_liftoff(pts, s);
+      locate_end(pts, s);
       next.p.arclength = cur.p.arclength + std::abs(ds);
       next.p.runs = runs - runs_before;
       b.points.push_back(next.p);
@@ -490,7 +543,7 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
       s.how = "the orbit's events are [" + p.signature + "] instead of [" + a.signature +
               "]: a grazing or lift-off between the two points, where the branch of smooth "
               "orbits ends";
-      locate_liftoff(pts, s);  // (from the smooth points before it)
+      locate_end(pts, s);  // (from the smooth points before it)
       b.specials.push_back(s);
       pts.push_back(std::move(next));
       return done("events_change", s.how);

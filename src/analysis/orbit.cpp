@@ -327,6 +327,22 @@ double SectionChart::scaled_distance(VecIn x, VecIn y) const {
   return d.size() ? d.maxCoeff() : 0.0;
 }
 
+std::optional<Penetration> penetrates_open_contact(const LagrangianModel& model,
+                                                   const SectionChart& chart, double t, VecIn x) {
+  const int n = model.num_dofs();
+  ContactKinematics c(n);
+  const Vec q = x.head(n), v = x.tail(n);
+  for (int k = 0; k < model.contact_count(); ++k) {
+    if (static_cast<std::size_t>(k) < chart.phases().size() &&
+        chart.phases()[static_cast<std::size_t>(k)] != Phase::Free)
+      continue;
+    model.compute_contact(k, t, q, v, c);
+    if (c.d_N < -64.0 * std::numeric_limits<double>::epsilon() * model.gap_scale(k))
+      return Penetration{k, c.d_N};
+  }
+  return std::nullopt;
+}
+
 // ---- the monodromy by finite differences -------------------------------------------------------
 
 bool FiniteDifferenceMonodromy::estimate(const PeriodMap& map, double T, const SectionChart& chart,
@@ -347,6 +363,19 @@ bool FiniteDifferenceMonodromy::estimate(const PeriodMap& map, double T, const S
             "constraints of the section",
             hs, j + 1);
         return false;
+      }
+      // a perturbation into the stator crosses the contact surface: the orbit grazes within
+      // the step (a free orbit near its grazing), the derivative is meaningless there
+      if (const auto pen = penetrates_open_contact(map.model(), chart, map.t0(), x)) {
+        if (!m.sequence_changed) {
+          m.sequence_changed = true;
+          m.sequence_note = fmt::format(
+              "perturbed by {:+.3g} along section coordinate {}, the state penetrates contact "
+              "{}'s stator (d_N = {:.3g} m): the orbit grazes within the step",
+              hs, j + 1, pen->contact + 1, pen->d_N);
+        }
+        c[side] = p;  // (no run: the estimate is marked meaningless)
+        continue;
       }
       const FlowRun r = map.run(x, T);
       if (!r.complete()) {

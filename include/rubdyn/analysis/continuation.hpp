@@ -65,7 +65,10 @@ struct BranchPoint {
   std::string signature;                ///< the orbit's event signature
   double amplitude = 0.0;               ///< max over the period of |rotor point| of contact 1 [m]
   double F_N_max = 0.0, F_N_min = 0.0;  ///< contact 1's normal force over the period [N]
-  long runs = 0;                        ///< runs of the return map for this point
+  /// contact 1's smallest gap over the period [m]: the smallest sample's, refined by the parabola
+  /// through it and its two neighbours where it is a strict local minimum
+  double d_N_min = 0.0;
+  long runs = 0;  ///< runs of the return map for this point
 };
 
 /// A special point between two points of the branch.

@@ -41,6 +41,7 @@
 #include <atomic>
 #include <complex>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -153,6 +154,13 @@ class SectionChart {
   std::vector<Phase> phases_;
   Mat B_, N_;  // scaled tangent and normal bases (2n x d, 2n x m)
 };
+
+/// A contact that the section's chart holds open (free at the section) whose stator the state
+/// x = (q, v) penetrates (d_N below -64 ulps of its gap scale): a state beyond a grazing of the
+/// free orbit, on the other side of the contact surface. (A closed contact's d_N is 0 to
+/// round-off on the chart and is not checked.)
+std::optional<Penetration> penetrates_open_contact(const LagrangianModel& model,
+                                                   const SectionChart& chart, double t, VecIn x);
 
 /// A monodromy matrix in a chart's coordinates with its error estimate.
 struct Monodromy {
