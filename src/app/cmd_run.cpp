@@ -26,6 +26,7 @@
 #include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/io/output_folder.hpp"
 #include "rubdyn/io/solver_options.hpp"
+#include "rubdyn/io/text_files.hpp"
 
 namespace rubdyn::app {
 
@@ -63,11 +64,18 @@ int run_command(const RunArgs& a) {
   if (a.h) sets.push_back("solver.h=" + *a.h);
   if (a.t_end) sets.push_back("run.t_end=" + *a.t_end);
   if (a.output_every) sets.push_back("output.every=" + *a.output_every);
-  // a path is a string as given, never TOML text ('run\new' is not run<newline>ew)
-  if (a.out) sets.push_back("output.folder=" + toml_quote(*a.out));
+  // a path is a string as given, never TOML text ('run\new' is not run<newline>ew); one that is
+  // not UTF-8 (a Latin-1 name) cannot go into case.resolved.toml: refused here, naming --out
+  // (as an override it would be named --set)
+  const bool out_utf8 = !a.out || valid_utf8(*a.out);
+  if (a.out && out_utf8) sets.push_back("output.folder=" + toml_quote(*a.out));
   std::vector<CaseIssue> bad;
   if (a.out && a.out->empty())  // an unset variable: not the case's default folder in silence
     bad.push_back({"command line", 0, "--out", "", "an empty path is no output folder"});
+  if (!out_utf8)
+    bad.push_back({"command line", 0, "--out", printable_text(*a.out),
+                   "a folder name is UTF-8 text (case.resolved.toml, which names it, is TOML): "
+                   "a byte of another encoding, shown as \\xHH, cannot be written back"});
   CaseSpec spec;
   try {
     spec = parse_case(text, a.c.path, sets);

@@ -230,6 +230,8 @@ TEST_CASE("Issue 34 CLI: an --out or --set that is not UTF-8 is refused, nothing
   CHECK(o.code == 2);
   CHECK(has(o.err, "dir\\xE9"));
   CHECK(has(o.err, "UTF-8"));
+  CHECK(has(o.err, "--out"));  // the option given, not the override it becomes
+  CHECK_FALSE(has(o.err, "--set"));
   CHECK(fs::is_empty(d));  // neither dir\xe9 nor "dir\xe9" with its quotes
   o = cli("check " + sh(kRef) + " --set 'name=\"n\xe9\"'");
   CHECK(o.code == 2);
