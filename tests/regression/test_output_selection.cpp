@@ -9,6 +9,9 @@
 #include <string>
 #include <vector>
 
+#include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/model_registry.hpp"
+#include "rubdyn/io/output_folder.hpp"
 #include "rubdyn/io/output_reader.hpp"
 #include "support/cli.hpp"
 
@@ -214,4 +217,48 @@ TEST_CASE("Output selection: a bad output.coordinates is exit 2 naming the key, 
     CHECK(has(r.err, why));
     CHECK(!fs::exists(out));
   }
+}
+
+TEST_CASE("Output selection: state.csv rows are on disk at once, the last sample at the end",
+          "[output]") {
+  // What a killed run keeps (the state after its last event) and what its end adds (the last
+  // sample, once): read while the sink is alive, as after a SIGKILL
+  const fs::path dir = fresh_dir("sel-sink");
+  const CaseSpec spec = load_case(kFe, {"output.coordinates=\"contacts\""});
+  const auto model = build_model(spec);
+  Sample s(model->num_dofs(), model->contact_count(),
+           static_cast<int>(model->observables().size()));
+  auto rows = [&] { return lines_of(dir / "state.csv").size() - 1; };
+  {
+    OutputFolder out(dir.string(), spec);
+    s.t = 0.0;
+    s.q[0] = 1.0;  // x0: written to state.csv only
+    out.sample(s);
+    CHECK(rows() == 1);  // the first sample
+    s.t = 1e-4;
+    s.q[0] = 2.0;
+    out.sample(s);
+    CHECK(rows() == 1);  // an ordinary sample: not a state row
+    EventRecord e;
+    e.t = 1.5e-4;
+    out.event(e);
+    s.t = 1.5e-4;
+    s.q[0] = 3.0;
+    out.sample(s);  // the sample after the event
+    CHECK(rows() == 2);
+    CHECK(fields(lines_of(dir / "state.csv").back()).at(1) == "3");
+    s.t = 2e-4;
+    s.q[0] = 4.0;
+    out.sample(s);
+    CHECK(rows() == 2);
+    out.end(RunSummary{});
+  }
+  const auto st = lines_of(dir / "state.csv");
+  REQUIRE(st.size() == 4);  // header, first, after the event, last
+  CHECK(fields(st.front()).at(1) == "x0");
+  CHECK(fields(st[3]).at(0) == "0.0002");
+  CHECK(fields(st[3]).at(1) == "4");
+  // the timeseries holds the selection only
+  CHECK(!has(lines_of(dir / "timeseries.csv").front(), "x0,"));
+  fs::remove_all(dir);
 }
