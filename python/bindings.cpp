@@ -206,6 +206,57 @@ py::tuple run_case(const Case& c, const py::object& progress, double progress_in
                         summary_json(summary));
 }
 
+/// rubdyn.branch: the case's forced orbit followed in a case key (analysis/orbit_case.hpp,
+/// find_case_branch), the case re-read from its text with its overrides and key = value at every
+/// value, on a worker thread as orbit_case (Ctrl-C ends the running run). Returns (branch.json's
+/// text, branch.csv's text, the CLI's exit code). CaseError for bad input, as the CLI's exit 2.
+py::tuple branch_case(const Case& c, const std::string& key, double to, int points, double ds,
+                      double ds_max, double scale, bool down, double tol, int max_iter,
+                      int samples) {
+  CaseBranchOptions o;
+  o.key = key;
+  o.to = to;
+  o.points = points;
+  o.ds = ds;
+  o.ds_max = ds_max;
+  o.scale = scale;
+  o.direction = down ? -1 : +1;
+  o.orbit.orbit.tol = tol;
+  o.orbit.orbit.max_iterations = max_iter;
+  o.orbit.orbit.samples = samples;
+  if (auto bad = branch_issues(c.spec, o); !bad.empty()) throw CaseError(std::move(bad));
+  std::atomic<bool> stop{false};
+  o.orbit.stop = &stop;
+  CaseBranch b;
+  std::exception_ptr error;
+  bool interrupted = false;
+  {
+    py::gil_scoped_release release;
+    auto done = std::async(std::launch::async, [&] {
+      try {
+        b = find_case_branch(c.text, c.path.empty() ? std::string("<string>") : c.path, c.overrides,
+                             o);
+      } catch (...) {
+        error = std::current_exception();
+      }
+    });
+    while (done.wait_for(std::chrono::milliseconds(50)) != std::future_status::ready) {
+      py::gil_scoped_acquire acquire;
+      if (PyErr_CheckSignals() != 0) {
+        PyErr_Clear();
+        interrupted = true;
+        stop = true;
+      }
+    }
+  }
+  if (error) std::rethrow_exception(error);
+  if (interrupted) {
+    PyErr_SetNone(PyExc_KeyboardInterrupt);
+    throw py::error_already_set();
+  }
+  return py::make_tuple(branch_json(b), branch_csv(b), exit_code(b));
+}
+
 /// rubdyn.orbit: the case's forced orbit (analysis/orbit_case.hpp), searched on a worker thread
 /// as run_case runs (Ctrl-C raises the stop flag; the search ends at its running run). Returns
 /// (orbit.json's text, the sampled period's columns, its events, its summary.json, the
@@ -584,6 +635,10 @@ PYBIND11_MODULE(_core, m) {
         py::arg("samples") = OrbitOptions{}.samples,
         py::arg("period") = std::numeric_limits<double>::quiet_NaN(),
         "(orbit_json, columns, events, summary_json, monodromy, exit_code) of `rubdyn orbit`");
+  m.def("branch", &branch_case, py::arg("case"), py::arg("key"), py::arg("to"), py::arg("points"),
+        py::arg("ds"), py::arg("ds_max"), py::arg("scale"), py::arg("down"), py::arg("tol"),
+        py::arg("max_iter"), py::arg("samples"),
+        "(branch_json, branch_csv, exit_code) of `rubdyn branch`");
 
   m.def(
       "campbell",

@@ -18,11 +18,11 @@ from collections.abc import Mapping
 from . import _core
 from ._core import Case, Model, CaseError, ReadError
 from .result import Result, read, PHASES, EVENT_FIELDS
-from .orbits import Orbit, orbit
+from .orbits import Branch, Orbit, branch, orbit
 
 __all__ = ["load_case", "parse_case", "run", "read", "analyze", "campbell", "compare", "solvers",
            "Case", "Model", "CaseError", "ReadError", "Result", "Comparison", "Analysis",
-           "PHASES", "EVENT_FIELDS", "orbit", "Orbit"]
+           "PHASES", "EVENT_FIELDS", "orbit", "Orbit", "branch", "Branch"]
 
 # Arguments are checked here as strictly as the CLI checks its options: a wrong type is a
 # TypeError, a wrong value a ValueError, each naming the argument (the case's own rules stay the

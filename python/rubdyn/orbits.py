@@ -61,11 +61,11 @@ class Orbit(dict):
                 f"{len(self['multipliers'])} multipliers)")
 
 
-def _count(value, name, least):
+def _count(value, name, least, who="orbit"):
     if not isinstance(value, numbers.Integral) or isinstance(value, bool):
-        raise TypeError(f"orbit: {name} must be an int, not {type(value).__name__}")
+        raise TypeError(f"{who}: {name} must be an int, not {type(value).__name__}")
     if value < least:
-        raise ValueError(f"orbit: {name} = {value}: must be >= {least}")
+        raise ValueError(f"{who}: {name} = {value}: must be >= {least}")
     return int(value)
 
 
@@ -100,3 +100,82 @@ def orbit(case, periods=1, settle=0, tol=1e-8, max_iter=20, samples=200, rtol=No
         float("nan") if period is None else period)
     run = Result.from_core(columns, events, summary_json, case=case)
     return Orbit(json.loads(text), run, np.asarray(monodromy), code)
+
+
+class Branch(dict):
+    """branch.json of `rubdyn branch` as a dict (key, from, outcome, message, points, specials:
+    kind, value, spread, between, how; runs, wall_seconds), with branch.csv as columns:
+
+        br.table          {column: numpy array} (text columns, stability and events, as lists)
+        br[br["key"]]     the varied key's values, one per point (also br.values)
+        br.specials       the located folds, period doublings, Neimark-Sacker points, and the
+                          events change (grazing or lift-off) that ends a smooth branch
+        br.exit_code      what the CLI would exit with (0, 3, 4)
+    """
+
+    def __init__(self, data, table, exit_code):
+        super().__init__(data)
+        self.table = table
+        self.exit_code = exit_code
+
+    @property
+    def values(self):
+        return self.table[self["key"]]
+
+    @property
+    def specials(self):
+        return self["specials"]
+
+    def __repr__(self):
+        return (f"Branch({self['key']} from {self['from']:.10g}: {self['points']} points, "
+                f"{self['outcome']}, {len(self['specials'])} special points)")
+
+
+_TEXT_COLUMNS = ("stability", "events")
+
+
+def _branch_table(text):
+    """branch.csv's text as {column: numpy array of floats, or a list for the text columns}."""
+    import csv
+    import io
+    rows = list(csv.reader(io.StringIO(text)))
+    header, body = rows[0], rows[1:]
+    table = {}
+    for i, name in enumerate(header):
+        col = [r[i] for r in body]
+        table[name] = (col if name in _TEXT_COLUMNS else
+                       np.array([float(x) if x else np.nan for x in col], dtype=float))
+    return table
+
+
+def branch(case, vary, to=None, points=200, ds=0.5, ds_max=3.0, scale=None, down=False, tol=1e-8,
+           max_iter=20, samples=200, rtol=None, atol=None, overrides=None):
+    """The case's forced orbit followed in the case key `vary` (e.g. "initial.omega0"), as
+    `rubdyn branch CASE --vary KEY` follows it (the same C++ continuation, branch.json and
+    branch.csv), returned as a Branch; nothing is written.
+
+    to: stop beyond this value. points: points on the branch, the first included. ds, ds_max:
+    the first and the largest arclength step. scale: the key's unit in the arclength (None: 1 %
+    of its value). down: the first step decreases the key. tol, max_iter, samples: as orbit().
+    Bad input raises rubdyn.CaseError, as the CLI exits 2."""
+    from . import Case, load_case, _path, _override_list, _finite, _real
+    if not isinstance(case, Case):
+        case = load_case(_path(case, "branch: case (a Case or a path)"))
+    if not isinstance(vary, str):
+        raise TypeError(f"branch: vary must be a case key (str), not {type(vary).__name__}")
+    sets = _override_list(overrides)
+    for name, key, value in (("rtol", "solver.rtol", rtol), ("atol", "solver.atol", atol)):
+        if value is not None:
+            sets.append(f"{key}={_real(value, f'branch: {name}')!r}")
+    if sets:
+        case = _core.with_overrides(case, sets)
+    tol = _finite(tol, "branch: tol")
+    if not tol > 0:
+        raise ValueError(f"branch: tol = {tol}: must be > 0")
+    text, csv_text, code = _core.branch(
+        case, vary, float("nan") if to is None else _finite(to, "branch: to"),
+        _count(points, "points", 1, "branch"), _finite(ds, "branch: ds"),
+        _finite(ds_max, "branch: ds_max"), 0.0 if scale is None else _finite(scale, "branch: scale"),
+        bool(down), tol, _count(max_iter, "max_iter", 1, "branch"),
+        _count(samples, "samples", 1, "branch"))
+    return Branch(json.loads(text), _branch_table(csv_text), code)

@@ -58,3 +58,36 @@ def test_orbit_that_does_not_converge_says_so():
     assert orb["outcome"] == "no_convergence" and orb.exit_code == 3
     assert orb.stability == "undecided"
     assert len(orb["newton"]) == 3 and len(orb.run) > 100
+
+
+def test_branch_is_the_cli_branch(cli, tmp_path):
+    """rubdyn.branch: the same continuation, branch.json and branch.csv as `rubdyn branch`."""
+    out = tmp_path / "b"
+    p = run_cli(cli, "branch", FULL_RUB, "--vary", "initial.omega0", "--points", "4", "--out",
+                str(out))
+    assert p.returncode == 0, p.stderr
+    with open(out / "branch.json") as f:
+        from_cli = json.load(f)
+    br = rubdyn.branch(FULL_RUB, "initial.omega0", points=4)
+    assert br.exit_code == 0 and br["outcome"] == "max_points" and br["points"] == 4
+    a, b = dict(br), from_cli
+    a.pop("wall_seconds")
+    b.pop("wall_seconds")
+    assert a == b
+    # branch.csv, column by column, bit for bit (the CLI writes shortest round-trip digits)
+    with open(out / "branch.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert list(br.table) == list(rows[0].keys())
+    for name, col in br.table.items():
+        if isinstance(col, list):
+            assert col == [r[name] for r in rows], name
+        else:
+            assert np.array_equal(col, [float(r[name]) if r[name] else np.nan for r in rows],
+                                  equal_nan=True), name
+    assert br.values[0] == 1500.0 and np.all(np.diff(br.values) > 0)
+    assert br.table["stability"] == ["stable"] * 4
+    # bad input: the CLI's exit 2 is rubdyn.CaseError
+    with pytest.raises(rubdyn.CaseError, match="vary|key"):
+        rubdyn.branch(FULL_RUB, "rotor.nonsense", points=2)
+    with pytest.raises(ValueError, match="branch: points"):
+        rubdyn.branch(FULL_RUB, "initial.omega0", points=0)
