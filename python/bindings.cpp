@@ -15,6 +15,7 @@
 #include <exception>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <future>
 #include <limits>
 #include <optional>
@@ -145,6 +146,41 @@ py::dict event_columns_of(const std::vector<EventRecord>& events, int contacts) 
   return d;
 }
 
+/// Runs `work` on a worker thread while the calling thread waits with the GIL released; every
+/// 50 ms the calling thread takes the GIL to let Python handle its signals (only the main thread
+/// can): Ctrl-C raises `stop`, which `work` obeys at its next check. An exception of `work` is
+/// re-raised here; returns whether Ctrl-C came (the caller raises KeyboardInterrupt, after its own
+/// errors).
+bool run_interruptibly(std::atomic<bool>& stop, const std::function<void()>& work) {
+  std::exception_ptr error;
+  bool interrupted = false;
+  {
+    py::gil_scoped_release release;
+    auto done = std::async(std::launch::async, [&] {
+      try {
+        work();
+      } catch (...) {
+        error = std::current_exception();
+      }
+    });
+    while (done.wait_for(std::chrono::milliseconds(50)) != std::future_status::ready) {
+      py::gil_scoped_acquire acquire;
+      if (PyErr_CheckSignals() != 0) {
+        PyErr_Clear();  // raised by the caller, once the work has ended
+        interrupted = true;
+        stop = true;
+      }
+    }
+  }
+  if (error) std::rethrow_exception(error);
+  return interrupted;
+}
+
+[[noreturn]] void raise_keyboard_interrupt() {
+  PyErr_SetNone(PyExc_KeyboardInterrupt);
+  throw py::error_already_set();
+}
+
 /// One run. It goes on a worker thread while the calling thread waits with the GIL released;
 /// every 50 ms the calling thread takes the GIL to let Python handle its signals (only the main
 /// thread can): Ctrl-C sets the solver's stop flag, the run ends at its next output sample (a
@@ -154,7 +190,7 @@ py::dict event_columns_of(const std::vector<EventRecord>& events, int contacts) 
 py::tuple run_case(const Case& c, const py::object& progress, double progress_interval) {
   MemorySink sink;
   RunSummary summary;
-  std::exception_ptr callback_error, run_error;
+  std::exception_ptr callback_error;
   std::atomic<bool> stop{false};
   ProgressFn fn;
   if (!progress.is_none()) {
@@ -175,31 +211,10 @@ py::tuple run_case(const Case& c, const py::object& progress, double progress_in
       }
     };
   }
-  bool interrupted = false;
-  {
-    py::gil_scoped_release release;
-    auto done = std::async(std::launch::async, [&] {
-      try {
-        summary = simulate(c.spec, sink, fn, &stop);
-      } catch (...) {
-        run_error = std::current_exception();
-      }
-    });
-    while (done.wait_for(std::chrono::milliseconds(50)) != std::future_status::ready) {
-      py::gil_scoped_acquire acquire;
-      if (PyErr_CheckSignals() != 0) {
-        PyErr_Clear();  // raised again below, once the run has ended
-        interrupted = true;
-        stop = true;
-      }
-    }
-  }
-  if (run_error) std::rethrow_exception(run_error);
+  const bool interrupted =
+      run_interruptibly(stop, [&] { summary = simulate(c.spec, sink, fn, &stop); });
   if (callback_error) std::rethrow_exception(callback_error);
-  if (interrupted) {
-    PyErr_SetNone(PyExc_KeyboardInterrupt);
-    throw py::error_already_set();
-  }
+  if (interrupted) raise_keyboard_interrupt();
   const std::unique_ptr<LagrangianModel> model = build_model(c.spec);
   return py::make_tuple(series_dict(series_table(*model, sink.samples, c.spec.output.coordinates)),
                         event_columns_of(sink.events, model->contact_count()),
@@ -228,32 +243,11 @@ py::tuple branch_case(const Case& c, const std::string& key, double to, int poin
   std::atomic<bool> stop{false};
   o.orbit.stop = &stop;
   CaseBranch b;
-  std::exception_ptr error;
-  bool interrupted = false;
-  {
-    py::gil_scoped_release release;
-    auto done = std::async(std::launch::async, [&] {
-      try {
+  if (run_interruptibly(stop, [&] {
         b = find_case_branch(c.text, c.path.empty() ? std::string("<string>") : c.path, c.overrides,
                              o);
-      } catch (...) {
-        error = std::current_exception();
-      }
-    });
-    while (done.wait_for(std::chrono::milliseconds(50)) != std::future_status::ready) {
-      py::gil_scoped_acquire acquire;
-      if (PyErr_CheckSignals() != 0) {
-        PyErr_Clear();
-        interrupted = true;
-        stop = true;
-      }
-    }
-  }
-  if (error) std::rethrow_exception(error);
-  if (interrupted) {
-    PyErr_SetNone(PyExc_KeyboardInterrupt);
-    throw py::error_already_set();
-  }
+      }))
+    raise_keyboard_interrupt();
   return py::make_tuple(branch_json(b), branch_csv(b), exit_code(b));
 }
 
@@ -273,31 +267,7 @@ py::tuple orbit_case(const Case& c, int periods, int settle, double tol, int max
   std::atomic<bool> stop{false};
   o.stop = &stop;
   CaseOrbit r;
-  std::exception_ptr error;
-  bool interrupted = false;
-  {
-    py::gil_scoped_release release;
-    auto done = std::async(std::launch::async, [&] {
-      try {
-        r = find_case_orbit(c.spec, o);
-      } catch (...) {
-        error = std::current_exception();
-      }
-    });
-    while (done.wait_for(std::chrono::milliseconds(50)) != std::future_status::ready) {
-      py::gil_scoped_acquire acquire;
-      if (PyErr_CheckSignals() != 0) {
-        PyErr_Clear();
-        interrupted = true;
-        stop = true;
-      }
-    }
-  }
-  if (error) std::rethrow_exception(error);
-  if (interrupted) {
-    PyErr_SetNone(PyExc_KeyboardInterrupt);
-    throw py::error_already_set();
-  }
+  if (run_interruptibly(stop, [&] { r = find_case_orbit(c.spec, o); })) raise_keyboard_interrupt();
   const FlowRun& run = r.result.orbit;
   return py::make_tuple(orbit_json(c.spec, r),
                         series_dict(series_table(*r.model, run.samples, c.spec.output.coordinates)),

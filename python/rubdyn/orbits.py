@@ -69,6 +69,18 @@ def _count(value, name, least, who="orbit"):
     return int(value)
 
 
+def _case_with(case, overrides, rtol, atol, who):
+    """The Case (or the case file at a path) with the overrides and the runs' rtol, atol."""
+    from . import Case, load_case, _path, _override_list, _real
+    if not isinstance(case, Case):
+        case = load_case(_path(case, f"{who}: case (a Case or a path)"))
+    sets = _override_list(overrides)
+    for name, key, value in (("rtol", "solver.rtol", rtol), ("atol", "solver.atol", atol)):
+        if value is not None:
+            sets.append(f"{key}={_real(value, f'{who}: {name}')!r}")
+    return _core.with_overrides(case, sets) if sets else case
+
+
 def orbit(case, periods=1, settle=0, tol=1e-8, max_iter=20, samples=200, rtol=None, atol=None,
           overrides=None, period=None):
     """The case's forced orbit, as `rubdyn orbit CASE` finds it (the same C++ search and the same
@@ -80,15 +92,8 @@ def orbit(case, periods=1, settle=0, tol=1e-8, max_iter=20, samples=200, rtol=No
     rtol, atol: the runs' tolerances (overrides of solver.rtol, solver.atol). A case without a
     prescribed constant spin raises rubdyn.CaseError, as the CLI exits 2; a search that does not
     converge returns an Orbit whose outcome says why (exit_code 3)."""
-    from . import Case, load_case, _path, _override_list, _finite, _real
-    if not isinstance(case, Case):
-        case = load_case(_path(case, "orbit: case (a Case or a path)"))
-    sets = _override_list(overrides)
-    for name, key, value in (("rtol", "solver.rtol", rtol), ("atol", "solver.atol", atol)):
-        if value is not None:
-            sets.append(f"{key}={_real(value, f'orbit: {name}')!r}")
-    if sets:
-        case = _core.with_overrides(case, sets)
+    from . import _finite
+    case = _case_with(case, overrides, rtol, atol, "orbit")
     tol = _finite(tol, "orbit: tol")
     if not tol > 0:
         raise ValueError(f"orbit: tol = {tol}: must be > 0")
@@ -158,17 +163,10 @@ def branch(case, vary, to=None, points=200, ds=0.5, ds_max=3.0, scale=None, down
     the first and the largest arclength step. scale: the key's unit in the arclength (None: 1 %
     of its value). down: the first step decreases the key. tol, max_iter, samples: as orbit().
     Bad input raises rubdyn.CaseError, as the CLI exits 2."""
-    from . import Case, load_case, _path, _override_list, _finite, _real
-    if not isinstance(case, Case):
-        case = load_case(_path(case, "branch: case (a Case or a path)"))
+    from . import _finite
+    case = _case_with(case, overrides, rtol, atol, "branch")
     if not isinstance(vary, str):
         raise TypeError(f"branch: vary must be a case key (str), not {type(vary).__name__}")
-    sets = _override_list(overrides)
-    for name, key, value in (("rtol", "solver.rtol", rtol), ("atol", "solver.atol", atol)):
-        if value is not None:
-            sets.append(f"{key}={_real(value, f'branch: {name}')!r}")
-    if sets:
-        case = _core.with_overrides(case, sets)
     tol = _finite(tol, "branch: tol")
     if not tol > 0:
         raise ValueError(f"branch: tol = {tol}: must be > 0")

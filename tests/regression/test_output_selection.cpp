@@ -24,27 +24,17 @@ namespace {
 const std::string kFe = std::string(RUBDYN_SOURCE_DIR) + "/cases/fe-runup.toml";
 
 std::vector<std::string> lines_of(const fs::path& p) {
-  std::istringstream in(slurp(p));
-  std::vector<std::string> out;
-  for (std::string l; std::getline(in, l);) out.push_back(l);
-  return out;
-}
-
-std::vector<std::string> fields(const std::string& line) {
-  std::vector<std::string> out;
-  std::istringstream in(line);
-  for (std::string f; std::getline(in, f, ',');) out.push_back(f);
-  return out;
+  return text_lines(slurp(p));
 }
 
 /// A CSV file's rows as maps from the header's names to the fields as written.
 std::vector<std::map<std::string, std::string>> rows_of(const fs::path& p) {
   const auto l = lines_of(p);
   REQUIRE(!l.empty());
-  const auto h = fields(l.front());
+  const auto h = csv_fields(l.front());
   std::vector<std::map<std::string, std::string>> out;
   for (std::size_t i = 1; i < l.size(); ++i) {
-    const auto f = fields(l[i]);
+    const auto f = csv_fields(l[i]);
     REQUIRE(f.size() == h.size());
     std::map<std::string, std::string> r;
     for (std::size_t c = 0; c < h.size(); ++c) r[h[c]] = f[c];
@@ -57,9 +47,9 @@ std::vector<std::map<std::string, std::string>> rows_of(const fs::path& p) {
 std::vector<std::string> event_times(const fs::path& dir) {
   const auto l = lines_of(dir / "events.csv");
   REQUIRE(!l.empty());
-  REQUIRE(fields(l.front()).front() == "t");
+  REQUIRE(csv_fields(l.front()).front() == "t");
   std::vector<std::string> t;
-  for (std::size_t i = 1; i < l.size(); ++i) t.push_back(fields(l[i]).front());
+  for (std::size_t i = 1; i < l.size(); ++i) t.push_back(csv_fields(l[i]).front());
   return t;
 }
 
@@ -178,7 +168,7 @@ TEST_CASE("Output selection: a wide model writes its contacts by default", "[out
   const CliOutcome r =
       cli("run " + sh((dir / "case.toml").string()) + " --quiet --out " + sh(out.string()));
   REQUIRE(r.code == 0);
-  const auto header = fields(lines_of(out / "timeseries.csv").front());
+  const auto header = csv_fields(lines_of(out / "timeseries.csv").front());
   const auto contains = [&](const std::string& name) {
     return std::find(header.begin(), header.end(), name) != header.end();
   };
@@ -190,7 +180,7 @@ TEST_CASE("Output selection: a wide model writes its contacts by default", "[out
   CHECK_FALSE(contains("q2"));
   CHECK_FALSE(contains("q69"));
   CHECK(has(slurp(out / "case.resolved.toml"), "coordinates = \"contacts\""));
-  const auto full = fields(lines_of(out / "state.csv").front());
+  const auto full = csv_fields(lines_of(out / "state.csv").front());
   CHECK(std::find(full.begin(), full.end(), "q69") != full.end());
   // asked for: every coordinate, and no state.csv
   REQUIRE(cli("run " + sh((dir / "case.toml").string()) + " --quiet --set " +
@@ -246,7 +236,7 @@ TEST_CASE("Output selection: state.csv rows are on disk at once, the last sample
     s.q[0] = 3.0;
     out.sample(s);  // the sample after the event
     CHECK(rows() == 2);
-    CHECK(fields(lines_of(dir / "state.csv").back()).at(1) == "3");
+    CHECK(csv_fields(lines_of(dir / "state.csv").back()).at(1) == "3");
     s.t = 2e-4;
     s.q[0] = 4.0;
     out.sample(s);
@@ -255,9 +245,9 @@ TEST_CASE("Output selection: state.csv rows are on disk at once, the last sample
   }
   const auto st = lines_of(dir / "state.csv");
   REQUIRE(st.size() == 4);  // header, first, after the event, last
-  CHECK(fields(st.front()).at(1) == "x0");
-  CHECK(fields(st[3]).at(0) == "0.0002");
-  CHECK(fields(st[3]).at(1) == "4");
+  CHECK(csv_fields(st.front()).at(1) == "x0");
+  CHECK(csv_fields(st[3]).at(0) == "0.0002");
+  CHECK(csv_fields(st[3]).at(1) == "4");
   // the timeseries holds the selection only
   CHECK(!has(lines_of(dir / "timeseries.csv").front(), "x0,"));
   fs::remove_all(dir);

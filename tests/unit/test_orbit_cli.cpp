@@ -28,15 +28,7 @@ double json_number(const std::string& text, const std::string& key) {
 
 std::vector<std::vector<std::string>> csv(const std::string& text) {
   std::vector<std::vector<std::string>> rows;
-  std::istringstream in(text);
-  std::string line;
-  while (std::getline(in, line)) {
-    std::vector<std::string> row;
-    std::istringstream l(line);
-    std::string f;
-    while (std::getline(l, f, ',')) row.push_back(f);
-    rows.push_back(row);
-  }
+  for (const std::string& line : text_lines(text)) rows.push_back(csv_fields(line));
   return rows;
 }
 
