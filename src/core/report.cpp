@@ -17,6 +17,9 @@ std::string brief_report(const RunSummary& s) {
                    s.t_end_requested, s.wall_seconds));
   line(fmt::format("work          {} steps, {} rhs, {} jac, {} root evals, {} newton iters",
                    s.steps, s.rhs_evals, s.jac_evals, s.root_evals, s.newton_iters));
+  if (s.err_test_fails + s.conv_fails > 0)
+    line(fmt::format("rejected      {} steps (error test), {} steps (no convergence)",
+                     s.err_test_fails, s.conv_fails));
   std::string ev;
   for (int k = 0; k < kNumEventKinds; ++k)
     if (s.events[k] > 0)

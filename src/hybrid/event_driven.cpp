@@ -698,6 +698,8 @@ RunSummary Engine::run(const MechanicalState& init, double t_end) {
     sum.jac_evals += st.jac_evals;
     sum.root_evals += st.root_evals;
     sum.newton_iters += st.newton_iters;
+    sum.err_test_fails += st.err_test_fails;
+    sum.conv_fails += st.conv_fails;
   };
   add_stats(free_.get());
   add_stats(projected_.get());

@@ -401,6 +401,8 @@ std::string summary_json(const RunSummary& s) {
   field("jac_evals", fmt::format("{}", s.jac_evals));
   field("root_evals", fmt::format("{}", s.root_evals));
   field("newton_iters", fmt::format("{}", s.newton_iters));
+  field("err_test_fails", fmt::format("{}", s.err_test_fails));
+  field("conv_fails", fmt::format("{}", s.conv_fails));
   field("suppressed_witnesses", fmt::format("{}", s.suppressed_witnesses));
   std::string ev = "{";
   for (int k = 0; k < kNumEventKinds; ++k)

@@ -142,6 +142,10 @@ struct RunSummary {
   double t_start = 0.0, t_end_requested = 0.0, t_reached = 0.0;
   double wall_seconds = 0.0;
   long steps = 0, rhs_evals = 0, jac_evals = 0, root_evals = 0, newton_iters = 0;
+  /// Event-driven solver: steps CVODE rejected and retried smaller, because the local error
+  /// test failed or the Newton (or fixed-point) iteration did not converge. Zero for the
+  /// fixed-step schemes, which never reject a step.
+  long err_test_fails = 0, conv_fails = 0;
   long suppressed_witnesses = 0;  ///< witness roots ignored at the very start of a phase
   std::array<long, kNumEventKinds> events{};
   std::array<double, kNumPhases> phase_time{};  ///< simulated seconds spent in each phase
