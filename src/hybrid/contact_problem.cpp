@@ -15,27 +15,33 @@ namespace {
 /// The Delassus entries and free accelerations from the solved columns of op.B. N: the model's
 /// dofs as a fixed size (the rigid rotor's 7: unrolled, measured 2x cheaper than the runtime-size
 /// loops in the contact phases) or Eigen::Dynamic; the same sums in the same order either way.
+/// Which of them: the Delassus entries (from M^-1 W_N, M^-1 W_T), the free accelerations (from
+/// M^-1 f), or both.
+enum class Parts { Both, Velocity, Constraint };
+
 template <int N>
-void delassus(ContactOperators& op, bool velocity_only) {
+void delassus(ContactOperators& op, Parts parts) {
   using V = Eigen::Matrix<double, N, 1>;
   const Eigen::Index n = op.B.rows();
   const Eigen::Map<const V> WN(op.c.W_N.data(), n), WT(op.c.W_T.data(), n);
-  const Eigen::Map<const V> Mf(op.B.col(0).data(), n);
-  if (!velocity_only) {
+  if (parts != Parts::Velocity) {
     const Eigen::Map<const V> MN(op.B.col(1).data(), n), MT(op.B.col(2).data(), n);
     op.A_NN = WN.dot(MN);
     op.A_NT = WN.dot(MT);
     op.A_TT = WT.dot(MT);
   }
-  op.b_N = WN.dot(Mf) + op.c.wdot_N;
-  op.b_T = WT.dot(Mf) + op.c.wdot_T;
+  if (parts != Parts::Constraint) {
+    const Eigen::Map<const V> Mf(op.B.col(0).data(), n);
+    op.b_N = WN.dot(Mf) + op.c.wdot_N;
+    op.b_T = WT.dot(Mf) + op.c.wdot_T;
+  }
 }
 
-void delassus(ContactOperators& op, bool velocity_only) {
+void delassus(ContactOperators& op, Parts parts) {
   if (op.size() == 7) {
-    delassus<7>(op, velocity_only);
+    delassus<7>(op, parts);
   } else {
-    delassus<Eigen::Dynamic>(op, velocity_only);
+    delassus<Eigen::Dynamic>(op, parts);
   }
 }
 
@@ -50,7 +56,18 @@ void compute_contact_operators(const LagrangianModel& m, double t, VecIn q, VecI
   std::copy_n(op.c.W_N.data(), n, B.col(1).data());
   std::copy_n(op.c.W_T.data(), n, B.col(2).data());
   m.solve_mass(q, B);
-  delassus(op, false);
+  delassus(op, Parts::Both);
+}
+
+void compute_constraint_operators(const LagrangianModel& m, double t, VecIn q, VecIn v,
+                                  ContactOperators& op) {
+  Mat& B = op.B;
+  m.compute_contact(0, t, q, v, op.c);
+  const Eigen::Index n = B.rows();
+  std::copy_n(op.c.W_N.data(), n, B.col(1).data());
+  std::copy_n(op.c.W_T.data(), n, B.col(2).data());
+  m.solve_mass(q, B.middleCols(1, 2));
+  delassus(op, Parts::Constraint);
 }
 
 void update_contact_velocity(const LagrangianModel& m, double t, VecIn q, VecIn v,
@@ -59,7 +76,7 @@ void update_contact_velocity(const LagrangianModel& m, double t, VecIn q, VecIn 
   m.smooth_forces(t, q, v, B.col(0));
   m.compute_contact(0, t, q, v, op.c);
   m.solve_mass(q, B.leftCols(1));
-  delassus(op, true);
+  delassus(op, Parts::Velocity);
 }
 
 namespace {

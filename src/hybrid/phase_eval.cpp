@@ -220,7 +220,7 @@ bool PhaseEval::place(double t, Vec& q, Vec& v, const Modes& modes,
     // in stick): one structured solve with M(q) for three right-hand sides, then one
     if (closed(modes[0])) {
       project_position(m_, t, q, v, kProjectionRel * tol[0].g0, op1_.c);
-      compute_contact_operators(m_, t, q, v, op1_);
+      compute_constraint_operators(m_, t, q, v, op1_);  // (M^-1 f comes at the new v)
       project_velocity(op1_, modes[0] == Phase::Stick ? 2 : 1, v);
       update_contact_velocity(m_, t, q, v, op1_);
     } else {

@@ -42,6 +42,12 @@ struct ContactOperators {
 };
 void compute_contact_operators(const LagrangianModel& m, double t, VecIn q, VecIn v,
                                ContactOperators& op);
+/// The constraint parts only (kinematics, M^{-1} W_N, M^{-1} W_T, the Delassus entries): M^{-1} f
+/// and b are left as they were, for update_contact_velocity to set (a velocity projection needs
+/// the constraints, not the forces, and changes v). The same bits in what it sets as
+/// compute_contact_operators (the models' mass solves take their columns one by one).
+void compute_constraint_operators(const LagrangianModel& m, double t, VecIn q, VecIn v,
+                                  ContactOperators& op);
 /// Updates the velocity-dependent parts (kinematic rates, M^{-1} f, b) for a new v at the same
 /// q: one solve with M(q) instead of three.
 void update_contact_velocity(const LagrangianModel& m, double t, VecIn q, VecIn v,
