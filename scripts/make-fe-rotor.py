@@ -258,6 +258,7 @@ def case_text(desc, r, name, rel, command):
         lines.append(f'{k:2} = "{rel}/{k}.npy"')
     lines.append(f"Jp = {r.Jp!r}   # shaft rho Ip L + the discs' Jp [kg m^2]")
     lines.append(f'coordinates = "{", ".join(r.names())}"')
+    lines.append('rotations = "dx*, dy*"   # the slopes (rad): their unit and error weight')
     several = len(r.seals) > 1
     for k, t in r.seals:
         x, y, _, _ = r.dofs(k)

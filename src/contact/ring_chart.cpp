@@ -369,7 +369,8 @@ void RingChart::lengths(std::span<const Phase> modes, std::span<double> L) const
   lengths(modes, pl, L);
 }
 
-void RingChart::lengths(std::span<const Phase> modes, const Plan& pl, std::span<double> L) const {
+void RingChart::lengths(std::span<const Phase> modes, const Plan& pl, std::span<double> L,
+                        std::span<int> copies) const {
   RUBDYN_DEMAND(pl.ok && std::equal(modes.begin(), modes.end(), pl.modes.begin()));
   const bool stick = any_stick(modes);
   double R = 0.0;
@@ -382,12 +383,16 @@ void RingChart::lengths(std::span<const Phase> modes, const Plan& pl, std::span<
       ++e;
       continue;
     }
-    L[static_cast<std::size_t>(j++)] = stick && i == spin_ ? R : 0.0;
+    const bool angle = stick && i == spin_;
+    if (!copies.empty()) copies[static_cast<std::size_t>(j)] = angle ? -1 : i;
+    L[static_cast<std::size_t>(j++)] = angle ? R : 0.0;
   }
   for (int k = 0; k < contact_count(); ++k) {
     const Phase m = modes[static_cast<std::size_t>(k)];
-    if (closed_mode(m) && m != Phase::Stick)
+    if (closed_mode(m) && m != Phase::Stick) {
+      if (!copies.empty()) copies[static_cast<std::size_t>(j)] = -1;
       L[static_cast<std::size_t>(j++)] = c_[static_cast<std::size_t>(k)].gap;
+    }
   }
 }
 

@@ -15,13 +15,15 @@ class SingleChart final : public PhaseChart {
   explicit SingleChart(const ContactChart& c) : c_(c) {}
   bool applies(const Modes& modes) const override { return modes.K == 1 && closed(modes[0]); }
   int dim(const Modes& modes) const override { return c_.dim(mode_of(modes)); }
-  void enter(const Modes& modes, VecIn q, VecIn v, VecOut p, VecOut pd,
-             std::span<double> lengths) override {
+  void enter(const Modes& modes, VecIn q, VecIn v, VecOut p, VecOut pd, std::span<double> lengths,
+             std::span<int> copies) override {
     mode_ = mode_of(modes);
     c_.chart(mode_, q, v, anchor_, p, pd);
     const ChartScales s = c_.scales(mode_);
     for (std::size_t i = 0; i < lengths.size(); ++i)
       lengths[i] = i < s.length.size() ? s.length[i] : 0.0;
+    for (std::size_t i = 0; i < copies.size(); ++i)
+      copies[i] = i < s.copies.size() ? s.copies[i] : -1;
   }
   void embed(VecIn p, VecIn pd, VecOut q, VecOut v) const override {
     c_.embed(mode_, anchor_, p, pd, q, v);
@@ -46,12 +48,12 @@ class MultiChart final : public PhaseChart {
   explicit MultiChart(const RingChart& c) : c_(c) {}
   bool applies(const Modes& modes) const override { return c_.applies(modes.span()); }
   int dim(const Modes& modes) const override { return c_.dim(modes.span()); }
-  void enter(const Modes& modes, VecIn q, VecIn v, VecOut p, VecOut pd,
-             std::span<double> lengths) override {
+  void enter(const Modes& modes, VecIn q, VecIn v, VecOut p, VecOut pd, std::span<double> lengths,
+             std::span<int> copies) override {
     modes_ = modes;
     c_.plan(modes_.span(), plan_);  // the modes' eliminations, for every rhs of the phase
     c_.chart(modes_.span(), plan_, q, v, anchor_, p, pd);
-    c_.lengths(modes_.span(), plan_, lengths);
+    c_.lengths(modes_.span(), plan_, lengths, copies);
   }
   void embed(VecIn p, VecIn pd, VecOut q, VecOut v) const override {
     c_.embed(modes_.span(), plan_, anchor_, p, pd, q, v);

@@ -24,9 +24,10 @@ class PhaseChart {
   virtual int dim(const Modes& modes) const = 0;
   /// Begins a phase of `modes` at a state (q, v) on its constraints: its reduced coordinates
   /// p, p' (size dim) and, per reduced coordinate, the length an angle moves a contact point by
-  /// per radian (0: a copy of a full coordinate), which weights its error.
+  /// per radian (0: a copy of a full coordinate), which weights its error, and the full
+  /// coordinate a copy copies (-1 for an angle or when the chart does not say).
   virtual void enter(const Modes& modes, VecIn q, VecIn v, VecOut p, VecOut pd,
-                     std::span<double> lengths) = 0;
+                     std::span<double> lengths, std::span<int> copies) = 0;
   /// The full state of reduced coordinates of the phase begun last.
   virtual void embed(VecIn p, VecIn pd, VecOut q, VecOut v) const = 0;
   /// p'' of a full acceleration a that satisfies the constraints at acceleration level, at the

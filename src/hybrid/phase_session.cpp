@@ -84,17 +84,20 @@ PhaseSession::PhaseSession(const PhaseContext& ctx, const SessionSettings& s, Se
       forces_(static_cast<std::size_t>(K_)),
       p_(Vec::Zero(dim_)),
       pd_(Vec::Zero(dim_)),
-      lengths_(static_cast<std::size_t>(dim_), 0.0) {
+      lengths_(static_cast<std::size_t>(dim_), 0.0),
+      copies_(static_cast<std::size_t>(dim_), -1) {
   RUBDYN_DEMAND(kind != SessionKind::Reduced || chart_ != nullptr);
   // Error weights of a session state (p, p', works) with dim coordinates: a coordinate that is a
-  // full one has rtol |p| + atol_q; an angle of a chart is weighted at each restart (restart());
-  // rates rtol |p'| + atol_v; works rtol |W| + 1e-9 J.
+  // full one has rtol |p| + atol_q / l, l its Coordinate::length (1 but for a matrices model's
+  // rotations); an angle of a chart is weighted at each restart (restart()); rates rtol |p'| +
+  // atol_v / l; works rtol |W| + 1e-9 J.
   const int N = 2 * dim_ + kNw;
   rtol_.assign(static_cast<std::size_t>(N), s.rtol);
   atol_.assign(static_cast<std::size_t>(N), kWorkAtol);
   for (int i = 0; i < dim_; ++i) {
-    atol_[static_cast<std::size_t>(i)] = s.atol_q;
-    atol_[static_cast<std::size_t>(dim_ + i)] = s.atol_v;
+    const double l = kind == SessionKind::Reduced ? 1.0 : length_of(i);
+    atol_[static_cast<std::size_t>(i)] = s.atol_q / l;
+    atol_[static_cast<std::size_t>(dim_ + i)] = s.atol_v / l;
   }
   ys_.assign(static_cast<std::size_t>(N), 0.0);
   scratch_.assign(static_cast<std::size_t>(N), 0.0);
@@ -165,18 +168,23 @@ void PhaseSession::to_full(const double* y, Vec& q, Vec& v) const {
 void PhaseSession::restart(double t, Vec& q, Vec& v, const Works& w, double t_stop) {
   if (kind_ == SessionKind::Projected) query_.place(t, q, v, ctx_.modes, ctx_.laws, ctx_.tol);
   if (chart_) {
-    chart_->enter(ctx_.modes, q, v, p_, pd_, lengths_);
+    chart_->enter(ctx_.modes, q, v, p_, pd_, lengths_, copies_);
     chart_->embed(p_, pd_, q, v);
     VMap(ys_.data(), dim_) = p_;
     VMap(ys_.data() + dim_, dim_) = pd_;
-    // error weights of this phase's coordinates: a copied coordinate rtol |p| + atol_q; an
-    // angle that moves a contact point by L per radian by the displacement it causes,
-    // absolutely, at the gap's scale: (rtol g0 + atol_q) / L (contact_chart.hpp)
+    // error weights of this phase's coordinates: a copied coordinate as the coordinate it
+    // copies, rtol |p| + atol_q / l (and its rate atol_v / l); an angle that moves a contact
+    // point by L per radian by the displacement it causes, absolutely, at the gap's scale:
+    // (rtol g0 + atol_q) / L (contact_chart.hpp), its rate atol_v
     for (int i = 0; i < dim_; ++i) {
-      const double L = lengths_[static_cast<std::size_t>(i)];
-      rtol_[static_cast<std::size_t>(i)] = L > 0.0 ? 0.0 : settings_.rtol;
-      atol_[static_cast<std::size_t>(i)] =
-          L > 0.0 ? (settings_.rtol * settings_.g0 + settings_.atol_q) / L : settings_.atol_q;
+      const auto u = static_cast<std::size_t>(i);
+      const double L = lengths_[u];
+      const int c = copies_[u];
+      const double l = L > 0.0 || c < 0 ? 1.0 : length_of(c);
+      rtol_[u] = L > 0.0 ? 0.0 : settings_.rtol;
+      atol_[u] =
+          L > 0.0 ? (settings_.rtol * settings_.g0 + settings_.atol_q) / L : settings_.atol_q / l;
+      atol_[static_cast<std::size_t>(dim_ + i)] = settings_.atol_v / l;
     }
     session_->set_tolerances(rtol_.data(), atol_.data());
   } else {

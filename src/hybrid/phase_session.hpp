@@ -126,6 +126,9 @@ class PhaseSession {
   static int lsys_projected(double t, const double* y, double gamma, int jok, int* jcur,
                             void* user);
   static int lsolve_projected(const double* b, double* x, void* user);
+  /// The absolute tolerances of the session's state (p, p', works) as CVODE weighs it (a chart
+  /// session's: since its last restart).
+  std::span<const double> absolute_tolerances() const { return atol_; }
   /// The unscaled value of a witness after evaluate() or evaluate_witnesses().
   double witness_value(const WitnessRef& w, double t, const Vec& q, const Vec& v) const {
     return ctx_.witness_value(w, query_, t, q, v);
@@ -133,6 +136,12 @@ class PhaseSession {
 
  private:
   void to_full(const double* y, Vec& q, Vec& v) const;
+  /// Coordinate::length of the model's coordinate i: its error weight's length.
+  double length_of(int i) const {
+    const auto& c = m_.coordinates();
+    return i >= 0 && static_cast<std::size_t>(i) < c.size() ? c[static_cast<std::size_t>(i)].length
+                                                            : 1.0;
+  }
   /// Free flight's Jacobian blocks at y: M, df/dv and df/dq - d(M a)/dq (in dfdq_) with a
   /// the given acceleration (null: free flight's M^-1 f, into a_), and their band (band_). As
   /// the model's entry lists (ne_, entries_ true) where it gives them and `lists` allows, in
@@ -163,6 +172,7 @@ class PhaseSession {
   mutable std::vector<ContactForce> forces_;
   Vec p_, pd_;
   std::vector<double> lengths_;
+  std::vector<int> copies_;  ///< the full coordinate each chart coordinate copies (-1: an angle)
   std::vector<double> rtol_, atol_, ys_;
   mutable std::vector<double> scratch_;
   // free flight's Jacobian (BDF): M, df/dq - d(M a)/dq, df/dv at its state, and the Newton

@@ -247,6 +247,7 @@ void matrices_keys(SchemaBuilder& b, const CaseSpec& spec) {
   b.text("rotor", "f0", [](CaseSpec& c) { return &c.matrix_files.f0; });
   b.num("rotor", "Jp", true, [](CaseSpec& c) { return &c.matrices.rotor.Jp; });
   b.text("rotor", "coordinates", [](CaseSpec& c) { return &c.matrix_files.coordinates; });
+  b.text("rotor", "rotations", [](CaseSpec& c) { return &c.matrix_files.rotations; });
   // one contact node as a section [contact_node] with [stator] and [contact], or several as
   // [[contact_node]] tables, each with its own ring and law
   using S = const CaseSpec&;
@@ -1594,6 +1595,47 @@ class Loader {
         names.clear();
       }
     }
+    // the rotations among them (rad: their unit and error weight): names or name* prefixes
+    const toml::node* nr = rot ? rot->get("rotations") : nullptr;
+    if (nr && nr->as_string()) {
+      read_early_.insert("rotor.rotations");
+      f.rotations = nr->as_string()->get();
+    }
+    r.rotation.clear();
+    if (!f.rotations.empty() && n >= 2 && matrices_ok_) {
+      std::vector<std::string> all = names;
+      if (static_cast<long>(all.size()) != n)
+        for (long i = 0; i < n; ++i) all.push_back("q" + std::to_string(i));
+      std::vector<bool> rotation(static_cast<std::size_t>(n), false);
+      std::string bad;
+      std::string word;
+      std::stringstream in(f.rotations);
+      while (bad.empty() && std::getline(in, word, ',')) {
+        const auto a = word.find_first_not_of(" \t"), b = word.find_last_not_of(" \t");
+        const std::string w = a == std::string::npos ? "" : word.substr(a, b - a + 1);
+        const bool prefix = !w.empty() && w.back() == '*';
+        const std::string stem = prefix ? w.substr(0, w.size() - 1) : w;
+        if (stem.empty() || stem.find('*') != std::string::npos) {
+          bad = fmt::format("'{}' is neither a coordinate's name nor a prefix followed by *", w);
+          break;
+        }
+        bool matched = false;
+        for (std::size_t i = 0; i < all.size(); ++i)
+          if (prefix ? all[i].rfind(stem, 0) == 0 : all[i] == stem) rotation[i] = matched = true;
+        if (!matched) {
+          std::string list;
+          for (std::size_t i = 0; i < all.size() && i < 12; ++i) list += (i ? ", " : "") + all[i];
+          bad = fmt::format("'{}' matches no coordinate of q (its coordinates: {}{})", w, list,
+                            all.size() > 12 ? ", ..." : "");
+        }
+      }
+      if (bad.empty()) {
+        r.rotation = std::move(rotation);
+      } else {
+        pend("rotor.rotations", nr, quoted(nr),
+             "must list q's rotations (rad) by name or prefix*, separated by commas: " + bad);
+      }
+    }
     if (!matrices_ok_) {
       // the coordinates of what could be read (so that [initial] is still checked): rotor.M's
       // size, or without it as many as rotor.coordinates names (so that [initial] keys of
@@ -1723,6 +1765,23 @@ class Loader {
         rule(nd.stator.c >= 0, sec + "stator_c", nd.stator.c,
              "must be >= 0 (the ring's support damping)");
       }
+    }
+    // a seal circle's centre is a deflection (m), never a rotation
+    if (static_cast<int>(p.rotor.rotation.size()) == n) {
+      const std::vector<MatrixNode> list = p.node_list();
+      for (std::size_t k = 0; k < list.size(); ++k)
+        for (const int i : {list[k].at.x, list[k].at.y}) {
+          if (i < 0 || i >= n || !p.rotor.rotation[static_cast<std::size_t>(i)]) continue;
+          const auto& nm = p.rotor.names;
+          rule(false, "rotor.rotations", 0.0,
+               fmt::format("must not name coordinate {} ('{}'): it is {}'s seal circle centre, "
+                           "a deflection in m",
+                           i,
+                           static_cast<int>(nm.size()) == n ? nm[static_cast<std::size_t>(i)]
+                                                            : "q" + std::to_string(i),
+                           list.size() > 1 ? "contact node " + std::to_string(k + 1)
+                                           : std::string("the contact node")));
+        }
     }
     // ([reduction]'s own rules are reduce_matrix_model's, reported by read_reduction)
     buildable_ = matrices_ok_ && reduction_ok_;

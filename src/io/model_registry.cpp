@@ -42,7 +42,7 @@ std::vector<Coordinate> matrices_coordinates(const CaseSpec& spec) {
     } catch (const ReductionRefused&) {
     }
   }
-  if (!red) return matrix_model_coordinates(p.rotor.size(), p.rotor.names, nodes);
+  if (!red) return matrix_model_coordinates(p.rotor.size(), p.rotor.names, nodes, p.rotor.rotation);
   for (std::size_t k = 0; k < nodes.size() && k < red->node_xy.size(); ++k) {
     nodes[k].at.x = red->node_xy[k].first;
     nodes[k].at.y = red->node_xy[k].second;

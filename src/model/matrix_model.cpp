@@ -1,6 +1,7 @@
 #include "rubdyn/model/matrix_model.hpp"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -73,8 +74,29 @@ double MatrixModel::Envelope::dot(int i, const double* x) const {
   return s0 + s1;
 }
 
+std::vector<double> rotation_lengths(const Mat& M, const std::vector<bool>& rotation) {
+  const auto n = static_cast<std::size_t>(M.rows());
+  std::vector<double> len(n, 1.0);
+  if (rotation.size() != n) return len;
+  std::vector<double> deflection;
+  for (std::size_t i = 0; i < n; ++i)
+    if (!rotation[i])
+      deflection.push_back(M(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i)));
+  if (deflection.empty()) return len;
+  // the median (the lower one of an even count): discs' lumped masses do not move it
+  const auto mid = deflection.begin() + static_cast<std::ptrdiff_t>((deflection.size() - 1) / 2);
+  std::nth_element(deflection.begin(), mid, deflection.end());
+  const double m = *mid;
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto ii = static_cast<Eigen::Index>(i);
+    if (rotation[i] && m > 0.0 && M(ii, ii) > 0.0) len[i] = std::sqrt(M(ii, ii) / m);
+  }
+  return len;
+}
+
 std::vector<Coordinate> matrix_model_coordinates(int n, const std::vector<std::string>& names,
-                                                 const std::vector<MatrixNode>& nodes) {
+                                                 const std::vector<MatrixNode>& nodes,
+                                                 const std::vector<bool>& rotation) {
   using R = CoordinateRole;
   const bool several = nodes.size() > 1;
   std::vector<Coordinate> c;
@@ -100,7 +122,10 @@ std::vector<Coordinate> matrix_model_coordinates(int n, const std::vector<std::s
       if (several) meaning.append(std::to_string(node + 1)).append("'s centre");
       meaning.append(x ? " (seal circle), horizontal" : " (seal circle), vertical");
     }
-    c.push_back({nm, rate, rate, "m", meaning,
+    const bool rot =
+        static_cast<int>(rotation.size()) == n && rotation[static_cast<std::size_t>(i)];
+    if (rot && node < 0) meaning = "a rotation of the user's rotor";
+    c.push_back({nm, rate, rate, rot ? "rad" : "m", meaning,
                  node < 0 ? R::Other
                  : x      ? R::RotorX
                           : R::RotorY,
@@ -182,7 +207,10 @@ MatrixModel::MatrixModel(const MatrixParams& p)
                 r.f0.size() == n_);
   // the energy V = 1/2 q^T K q and the Lagrangian's G need these exactly (io symmetrises)
   RUBDYN_DEMAND(r.K == r.K.transpose() && r.G == -r.G.transpose());
-  coords_ = matrix_model_coordinates(n_, r.names, list);
+  coords_ = matrix_model_coordinates(n_, r.names, list, r.rotation);
+  const std::vector<double> len = rotation_lengths(r.M, r.rotation);
+  for (int i = 0; i < n_; ++i)
+    coords_[static_cast<std::size_t>(i)].length = len[static_cast<std::size_t>(i)];
   Eigen::LLT<Mat> llt(r.M);
   RUBDYN_DEMAND(llt.info() == Eigen::Success);
   // L's rows are read from the factor itself: the entries left of a row's first nonzero of M
@@ -707,6 +735,19 @@ ChartScales MatrixModel::Chart::scales(ChartMode mode) const {
   sc.length.assign(static_cast<std::size_t>(dim(mode)), 0.0);
   sc.length[static_cast<std::size_t>(m_.slot_)] =
       mode == ChartMode::Slip ? m_.nd(0).gap : m_.nd(0).radius;
+  // the copies, in chart()'s order: q without the node's (x, y), theta in slip, the ring
+  sc.copies.assign(sc.length.size(), -1);
+  const int nr = m_.n_ - 1;
+  for (int k = 0; k < nr; ++k)
+    if (k != m_.slot_)
+      sc.copies[static_cast<std::size_t>(k)] =
+          m_.others_[static_cast<std::size_t>(k < m_.slot_ ? k : k - 1)];
+  int k = nr;
+  if (mode == ChartMode::Slip) sc.copies[static_cast<std::size_t>(k++)] = m_.th_;
+  if (m_.sprung_) {
+    sc.copies[static_cast<std::size_t>(k++)] = m_.xs_;
+    sc.copies[static_cast<std::size_t>(k)] = m_.ys_;
+  }
   return sc;
 }
 

@@ -622,3 +622,70 @@ TEST_CASE("Case files with [[contact_node]] tables: read, overridden, written ba
   CHECK(dz <= 1e-12);
   CHECK(a.events.size() == b.events.size());
 }
+
+TEST_CASE("Matrices model: rotor.rotations marks q's rotations, their unit and error length",
+          "[matrices][io]") {
+  // four coordinates: the node's x, y (deflections, 2 kg each) and two rotations whose diagonal
+  // masses 0.08 and 0.02 kg m^2 give the lengths of equal kinetic energy sqrt(0.08 / 2) = 0.2 m
+  // and sqrt(0.02 / 2) = 0.1 m (the median of the deflections' masses: 2 kg)
+  const fs::path d = scratch("rotations");
+  const fs::path src = d / "case.toml";
+  write(d / "M.csv", "2,0,0,0\n0,2,0,0\n0,0,0.08,0\n0,0,0,0.02\n");
+  write(d / "C.csv", "1,0,0,0\n0,1,0,0\n0,0,0.01,0\n0,0,0,0.01\n");
+  write(d / "K.csv", "1e6,0,0,0\n0,1e6,0,0\n0,0,1e4,0\n0,0,0,1e4\n");
+  write(d / "G.csv", "0,0,0,0\n0,0,0,0\n0,0,0,0.05\n0,0,-0.05,0\n");
+  const std::string names = "coordinates = \"x, y, tx, ty\"\n";
+  const CaseSpec plain = parse_case(case_text(d, names), src.string());
+  CHECK(plain.matrices.rotor.rotation.empty());
+  const MatrixModel plain_model(plain.matrices);
+  for (const auto& c : plain_model.coordinates()) {
+    CHECK(c.length == 1.0);
+    if (c.name != "theta") CHECK(c.unit == "m");
+  }
+  for (const std::string spec : {"t*", "tx, ty", "tx, t*"}) {
+    INFO(spec);
+    const CaseSpec c =
+        parse_case(case_text(d, names + "rotations = \"" + spec + "\"\n"), src.string());
+    REQUIRE(c.matrices.rotor.rotation == std::vector<bool>{false, false, true, true});
+    const MatrixModel m(c.matrices);
+    const auto& co = m.coordinates();
+    CHECK(co[0].unit == "m");
+    CHECK(co[0].length == 1.0);
+    CHECK(co[2].unit == "rad");
+    CHECK(co[3].unit == "rad");
+    // (a square root of a ratio of decimals: a few ulps)
+    CHECK(co[2].length == Approx(0.2).epsilon(1e-15));
+    CHECK(co[3].length == Approx(0.1).epsilon(1e-15));
+    CHECK(co[4].name == "theta");
+    CHECK(co[4].length == 1.0);  // the spin angle stays weighted as before
+    // the case's own coordinate list says the unit too, and case.resolved.toml keeps the key
+    CHECK(initial_coordinates(c)[2].unit == "rad");
+    const CaseSpec back = parse_case(to_toml(c), "/elsewhere/case.resolved.toml");
+    CHECK(back.matrices.rotor.rotation == c.matrices.rotor.rotation);
+  }
+  // no rotation among q: the lengths stay 1; every coordinate a rotation: no deflection to
+  // compare with, 1 too
+  CHECK(rotation_lengths(Mat::Identity(3, 3) * 2.0, {false, false, false}) ==
+        std::vector<double>{1.0, 1.0, 1.0});
+  CHECK(rotation_lengths(Mat::Identity(2, 2) * 2.0, {true, true}) == std::vector<double>{1.0, 1.0});
+  // bad values, each naming the key
+  const struct {
+    std::string value, says;
+  } bad[] = {
+      {"tz", "'tz' matches no coordinate of q (its coordinates: x, y, tx, ty)"},
+      {"*", "'*' is neither a coordinate's name nor a prefix"},
+      {"tx, ", "'' is neither"},
+      {"x*", "must not name coordinate 0 ('x'): it is the contact node's seal circle centre"},
+      {"ty, y", "must not name coordinate 1 ('y')"},
+  };
+  for (const auto& b : bad) {
+    INFO(b.value);
+    const auto is = refused(case_text(d, names + "rotations = \"" + b.value + "\"\n"), src);
+    const CaseIssue* i = find_issue(is, "rotor.rotations");
+    REQUIRE(i);
+    CHECK_THAT(i->rule, Catch::Contains(b.says));
+    CHECK(i->file == src.string());
+    CHECK(i->line == 10);  // [model], kind, [rotor], M, C, K, G, Jp, coordinates, rotations
+  }
+  fs::remove_all(d);
+}

@@ -37,6 +37,9 @@ enum class ChartMode : int { Slip = 0, Stick = 1 };
 /// stricter than the atol_v / L the displacement rate would give).
 struct ChartScales {
   std::vector<double> length;  ///< one per reduced coordinate (size dim(mode)); empty: all 0
+  /// Per reduced coordinate with length 0, the full coordinate it copies (its error weighted
+  /// with that coordinate's Coordinate::length), or -1; empty: none named (weighted as metres).
+  std::vector<int> copies;
 };
 
 /// What a chart keeps of the state where a phase began (e.g. phi0, theta0 of a stick phase).

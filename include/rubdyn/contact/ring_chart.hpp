@@ -110,7 +110,10 @@ class RingChart {
   void embed(std::span<const Phase> modes, const Plan& pl, const RingAnchor& anchor, VecIn p,
              VecIn pd, VecOut q, VecOut v) const;
   void reduce(std::span<const Phase> modes, const Plan& pl, VecIn q, VecIn a, VecOut pdd) const;
-  void lengths(std::span<const Phase> modes, const Plan& pl, std::span<double> L) const;
+  /// `copies` (empty, or one per reduced coordinate): the full coordinate each copy copies, -1
+  /// for the angles (ChartScales::copies).
+  void lengths(std::span<const Phase> modes, const Plan& pl, std::span<double> L,
+               std::span<int> copies = {}) const;
 
  private:
   /// The pivots of the fixed rings' x (or y: use_y) equations; false if rank-deficient.

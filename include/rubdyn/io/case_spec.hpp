@@ -76,6 +76,7 @@ struct OutputOptions {
 struct MatrixFiles {
   std::string M, C, K, G, f0;  ///< f0 empty: no constant load
   std::string coordinates;     ///< "x_b, y_b, x_r, y_r"; empty: q0, q1, ...
+  std::string rotations;       ///< q's rotations (rad): "dx*, dy*"; empty: none
 };
 
 struct CaseSpec {

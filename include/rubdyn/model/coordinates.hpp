@@ -30,6 +30,12 @@ struct Coordinate {
   std::string meaning;   ///< one line for the documentation
   CoordinateRole role = CoordinateRole::Other;
   int plane = 0;  ///< contact plane of a Rotor*/Stator* coordinate (0-based contact index)
+  /// The integrator's error weights (hybrid/phase_session.cpp): a unit of this coordinate counts
+  /// as `length` metres, so it is resolved to atol / length (its rate to atol_v / length). 1 for
+  /// deflections and for the models' own angles (the spin angle, weighted by rtol |theta|); a
+  /// rotation of a matrices model (an FE shaft's slope, a disc's tilt) has the length of equal
+  /// kinetic energy, sqrt(M_ii / m) (MatrixModel, docs/fe-rotors.md).
+  double length = 1.0;
 };
 
 /// Index of the coordinate with `role` (in contact plane `plane` for the plane roles), or -1.

@@ -53,6 +53,10 @@ struct MatrixRotorParams {
   double Jp = 0.06;
   /// The names of q (n); empty: q0, q1, ...
   std::vector<std::string> names;
+  /// Which coordinates of q are rotations in rad (an FE shaft's slopes, a disc's tilt): n flags,
+  /// or empty (all deflections in m). Their unit is "rad" and their error weight the length of
+  /// equal kinetic energy (Coordinate::length).
+  std::vector<bool> rotation;
   int size() const { return static_cast<int>(M.rows()); }
 };
 
@@ -98,9 +102,17 @@ struct MatrixParams {
 
 /// The coordinates of a matrices model of size n with these names (empty: q0..q{n-1}) and
 /// these contact nodes: q, theta, then each sprung node's ring (x_s, y_s for one node; x_s_k,
-/// y_s_k, k = 1..K, for several).
+/// y_s_k, k = 1..K, for several). `rotation` (n flags or empty) marks q's rotations (unit rad).
 std::vector<Coordinate> matrix_model_coordinates(int n, const std::vector<std::string>& names,
-                                                 const std::vector<MatrixNode>& nodes);
+                                                 const std::vector<MatrixNode>& nodes,
+                                                 const std::vector<bool>& rotation = {});
+
+/// The error lengths of q's rotations (Coordinate::length): sqrt(M_ii / m) with m the median
+/// of M's diagonal over the deflections (not rotations), the length at which a rotation rate
+/// carries the kinetic energy of a deflection rate (the shaft's consistent mass: about 0.16 of
+/// the element's length, the lever arm of the slope in the element's deflection); 1 for
+/// deflections. All 1 when q has no rotations or no deflections.
+std::vector<double> rotation_lengths(const Mat& M, const std::vector<bool>& rotation);
 
 class MatrixModel final : public LagrangianModel {
  public:
