@@ -1603,16 +1603,12 @@ class Loader {
     }
     r.rotation.clear();
     if (!f.rotations.empty() && n >= 2 && matrices_ok_) {
-      std::vector<std::string> all = names;
-      if (static_cast<long>(all.size()) != n)
-        for (long i = 0; i < n; ++i) all.push_back("q" + std::to_string(i));
+      // q's coordinates as the model names them (the first n; q0, q1, ... without names)
+      std::vector<Coordinate> q = matrix_model_coordinates(static_cast<int>(n), names, {});
+      q.resize(static_cast<std::size_t>(n));
       std::vector<bool> rotation(static_cast<std::size_t>(n), false);
       std::string bad;
-      std::string word;
-      std::stringstream in(f.rotations);
-      while (bad.empty() && std::getline(in, word, ',')) {
-        const auto a = word.find_first_not_of(" \t"), b = word.find_last_not_of(" \t");
-        const std::string w = a == std::string::npos ? "" : word.substr(a, b - a + 1);
+      for (const std::string& w : comma_words(f.rotations)) {
         const bool prefix = !w.empty() && w.back() == '*';
         const std::string stem = prefix ? w.substr(0, w.size() - 1) : w;
         if (stem.empty() || stem.find('*') != std::string::npos) {
@@ -1620,13 +1616,14 @@ class Loader {
           break;
         }
         bool matched = false;
-        for (std::size_t i = 0; i < all.size(); ++i)
-          if (prefix ? all[i].rfind(stem, 0) == 0 : all[i] == stem) rotation[i] = matched = true;
+        for (std::size_t i = 0; i < q.size(); ++i) {
+          const std::string& nm = q[i].name;
+          if (prefix ? nm.rfind(stem, 0) == 0 : nm == stem) rotation[i] = matched = true;
+        }
         if (!matched) {
-          std::string list;
-          for (std::size_t i = 0; i < all.size() && i < 12; ++i) list += (i ? ", " : "") + all[i];
-          bad = fmt::format("'{}' matches no coordinate of q (its coordinates: {}{})", w, list,
-                            all.size() > 12 ? ", ..." : "");
+          bad = fmt::format("'{}' matches no coordinate of q (its coordinates: {})", w,
+                            brief_coordinate_list(q));
+          break;
         }
       }
       if (bad.empty()) {

@@ -50,7 +50,7 @@ std::vector<SampleColumn> timeseries_columns(const LagrangianModel& m) {
   return timeseries_columns(m.coordinates(), m.observables(), m.contact_count());
 }
 
-std::vector<std::string> output_coordinate_words(std::string_view selection) {
+std::vector<std::string> comma_words(std::string_view selection) {
   std::vector<std::string> words;
   std::size_t start = 0;
   for (;;) {
@@ -65,9 +65,17 @@ std::vector<std::string> output_coordinate_words(std::string_view selection) {
   return words;
 }
 
+std::string brief_coordinate_list(const std::vector<Coordinate>& coords) {
+  std::string names;
+  for (std::size_t i = 0; i < coords.size() && i < 12; ++i)
+    names += (i ? ", " : "") + coords[i].name;
+  if (coords.size() > 12) names += fmt::format(", ... ({} in all)", coords.size());
+  return names;
+}
+
 std::string output_coordinates_problem(std::string_view selection,
                                        const std::vector<Coordinate>& coords) {
-  const std::vector<std::string> words = output_coordinate_words(selection);
+  const std::vector<std::string> words = comma_words(selection);
   if (words.size() == 1 && words.front() == "all") return "";
   for (const std::string& w : words) {
     if (w.empty())
@@ -77,14 +85,10 @@ std::string output_coordinates_problem(std::string_view selection,
       return "\"all\" stands alone (every coordinate); a list names the coordinates written "
              "besides those of the contacts and the spin";
     if (w == "contacts" || find_coordinate(coords, w) >= 0) continue;
-    std::string names;
-    for (std::size_t i = 0; i < coords.size() && i < 12; ++i)
-      names += (i ? ", " : "") + coords[i].name;
-    if (coords.size() > 12) names += fmt::format(", ... ({} in all)", coords.size());
     return fmt::format(
         "'{}' is no coordinate of the model (its coordinates: {}); the words are \"all\" alone, "
         "or coordinate names and \"contacts\"",
-        w, names);
+        w, brief_coordinate_list(coords));
   }
   return "";
 }
@@ -97,7 +101,7 @@ std::vector<int> written_coordinates(const LagrangianModel& m, std::string_view 
   const auto& coords = m.coordinates();
   const int n = static_cast<int>(coords.size());
   std::vector<char> keep(coords.size(), 0);
-  const std::vector<std::string> words = output_coordinate_words(selection);
+  const std::vector<std::string> words = comma_words(selection);
   const bool all = words.size() == 1 && words.front() == "all";
   for (int i = 0; i < n; ++i)
     keep[static_cast<std::size_t>(i)] =

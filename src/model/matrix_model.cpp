@@ -639,7 +639,7 @@ void MatrixModel::Chart::chart(ChartMode mode, VecIn q, VecIn v, ChartAnchor& an
   const int nr = m.n_ - 1;
   for (int k = 0; k < nr; ++k) {
     if (k == m.slot_) continue;
-    const int i = m.others_[static_cast<std::size_t>(k < m.slot_ ? k : k - 1)];
+    const int i = copied(k);
     p[k] = q[i];
     pd[k] = v[i];
   }
@@ -671,7 +671,7 @@ void MatrixModel::Chart::embed(ChartMode mode, const ChartAnchor& anchor, VecIn 
   const int nr = m.n_ - 1;
   for (int k = 0; k < nr; ++k) {
     if (k == m.slot_) continue;
-    const int i = m.others_[static_cast<std::size_t>(k < m.slot_ ? k : k - 1)];
+    const int i = copied(k);
     q[i] = p[k];
     v[i] = pd[k];
   }
@@ -712,7 +712,7 @@ void MatrixModel::Chart::reduce(ChartMode mode, const ChartAnchor& /*anchor*/, V
   const int nr = m.n_ - 1;
   for (int k = 0; k < nr; ++k) {
     if (k == m.slot_) continue;
-    pdd[k] = a[m.others_[static_cast<std::size_t>(k < m.slot_ ? k : k - 1)]];
+    pdd[k] = a[copied(k)];
   }
   int k = nr;
   if (mode == ChartMode::Slip) {
@@ -739,9 +739,7 @@ ChartScales MatrixModel::Chart::scales(ChartMode mode) const {
   sc.copies.assign(sc.length.size(), -1);
   const int nr = m_.n_ - 1;
   for (int k = 0; k < nr; ++k)
-    if (k != m_.slot_)
-      sc.copies[static_cast<std::size_t>(k)] =
-          m_.others_[static_cast<std::size_t>(k < m_.slot_ ? k : k - 1)];
+    if (k != m_.slot_) sc.copies[static_cast<std::size_t>(k)] = copied(k);
   int k = nr;
   if (mode == ChartMode::Slip) sc.copies[static_cast<std::size_t>(k++)] = m_.th_;
   if (m_.sprung_) {

@@ -68,9 +68,11 @@ inline const char* default_output_coordinates(std::size_t n) {
   return n > kWideModelCoordinates ? "contacts" : "all";
 }
 
-/// The words of an output.coordinates value (split at commas, blanks trimmed; empty words kept,
-/// for the validator to name).
-std::vector<std::string> output_coordinate_words(std::string_view selection);
+/// The words of a comma-separated list (output.coordinates, rotor.rotations): split at commas,
+/// blanks trimmed; empty words kept, for the validator to name.
+std::vector<std::string> comma_words(std::string_view list);
+/// The first twelve of these coordinates' names for a message, "x0, y0, ..., ... (52 in all)".
+std::string brief_coordinate_list(const std::vector<Coordinate>& coords);
 /// The problem with an output.coordinates value for a case whose coordinates are `coords`
 /// (the [initial] coordinates: a prescribed spin's theta included), or "" when it is valid:
 /// "all" alone, otherwise each word "contacts" or one of the coordinates' names.

@@ -170,6 +170,10 @@ class MatrixModel final : public LagrangianModel {
     ChartScales scales(ChartMode mode) const override;
 
    private:
+    /// The coordinate of q that reduced coordinate k < n - 1, k != slot_, copies.
+    int copied(int k) const {
+      return m_.others_[static_cast<std::size_t>(k < m_.slot_ ? k : k - 1)];
+    }
     const MatrixModel& m_;
   };
 
