@@ -16,9 +16,14 @@ constexpr int kRows = RingAnchor::kMax;
 constexpr int kCols = 2 * RingAnchor::kMax;  // each fixed contact's point: at most 2 coordinates
 }  // namespace
 
-RingChart::RingChart(int n, int spin, std::vector<RingContact> contacts)
-    : n_(n), spin_(spin), c_(std::move(contacts)), ring_owner_(static_cast<std::size_t>(n), -1) {
+RingChart::RingChart(int n, int spin, std::vector<RingContact> contacts, std::optional<SpinLaw> law)
+    : n_(n),
+      spin_(spin),
+      c_(std::move(contacts)),
+      law_(law),
+      ring_owner_(static_cast<std::size_t>(n), -1) {
   RUBDYN_DEMAND(static_cast<int>(c_.size()) <= RingAnchor::kMax);
+  RUBDYN_DEMAND(!(law_ && spin_ >= 0));  // a spin is a coordinate or a function of time
   for (int k = 0; k < contact_count(); ++k) {
     const RingContact& c = c_[static_cast<std::size_t>(k)];
     RUBDYN_DEMAND(c.gap > 0.0);
@@ -130,7 +135,7 @@ void RingChart::plan(std::span<const Phase> modes, Plan& pl) const {
     if (!closed_mode(mk)) continue;
     any = true;
     const RingContact& c = c_[static_cast<std::size_t>(k)];
-    if (mk == Phase::Stick && spin_ < 0) return;
+    if (mk == Phase::Stick && spin_ < 0 && !law_) return;
     if (c.ring >= 0) {
       if (ring_owner_[static_cast<std::size_t>(c.ring)] != k ||
           ring_owner_[static_cast<std::size_t>(c.ring + 1)] != k)
@@ -226,18 +231,19 @@ int RingChart::dim(std::span<const Phase> modes) const {
   return d;
 }
 
-void RingChart::chart(std::span<const Phase> modes, VecIn q, VecIn v, RingAnchor& anchor, VecOut p,
-                      VecOut pd) const {
+void RingChart::chart(std::span<const Phase> modes, double t, VecIn q, VecIn v, RingAnchor& anchor,
+                      VecOut p, VecOut pd) const {
   Plan pl;
   plan(modes, pl);
-  chart(modes, pl, q, v, anchor, p, pd);
+  chart(modes, pl, t, q, v, anchor, p, pd);
 }
 
-void RingChart::chart(std::span<const Phase> modes, const Plan& pl, VecIn q, VecIn v,
+void RingChart::chart(std::span<const Phase> modes, const Plan& pl, double t, VecIn q, VecIn v,
                       RingAnchor& anchor, VecOut p, VecOut pd) const {
   RUBDYN_DEMAND(pl.ok && std::equal(modes.begin(), modes.end(), pl.modes.begin()));
   const bool stick = any_stick(modes);
-  anchor.theta0 = stick ? q[spin_] : 0.0;
+  anchor.theta0 = stick && spin_ >= 0 ? q[spin_] : 0.0;
+  anchor.t0 = t;
   int j = 0;
   for (int i = 0, e = 0; i < n_; ++i) {
     if (e < pl.n_elim && pl.elim[static_cast<std::size_t>(e)] == i) {  // eliminated
@@ -265,15 +271,15 @@ void RingChart::chart(std::span<const Phase> modes, const Plan& pl, VecIn q, Vec
   }
 }
 
-void RingChart::embed(std::span<const Phase> modes, const RingAnchor& anchor, VecIn p, VecIn pd,
-                      VecOut q, VecOut v) const {
+void RingChart::embed(std::span<const Phase> modes, const RingAnchor& anchor, double t, VecIn p,
+                      VecIn pd, VecOut q, VecOut v) const {
   Plan pl;
   plan(modes, pl);
-  embed(modes, pl, anchor, p, pd, q, v);
+  embed(modes, pl, anchor, t, p, pd, q, v);
 }
 
 void RingChart::embed(std::span<const Phase> modes, const Plan& pl, const RingAnchor& anchor,
-                      VecIn p, VecIn pd, VecOut q, VecOut v) const {
+                      double t, VecIn p, VecIn pd, VecOut q, VecOut v) const {
   RUBDYN_DEMAND(pl.ok && std::equal(modes.begin(), modes.end(), pl.modes.begin()));
   const bool stick = any_stick(modes);
   int j = 0;
@@ -294,9 +300,11 @@ void RingChart::embed(std::span<const Phase> modes, const Plan& pl, const RingAn
     const RingContact& c = c_[static_cast<std::size_t>(k)];
     const auto ku = static_cast<std::size_t>(k);
     if (m == Phase::Stick) {
+      // theta - theta0 and omega: the spin coordinate's, or the prescribed spin's at t
       const double ratio = c.radius / c.gap;
-      phi[ku] = anchor.phi0[ku] - ratio * (q[spin_] - anchor.theta0);
-      phid[ku] = -ratio * v[spin_];
+      const double turned = spin_ >= 0 ? q[spin_] - anchor.theta0 : law_->advance(anchor.t0, t);
+      phi[ku] = anchor.phi0[ku] - ratio * turned;
+      phid[ku] = -ratio * (spin_ >= 0 ? v[spin_] : law_->omega(t));
     } else {
       phi[ku] = p[j];
       phid[ku] = pd[j];

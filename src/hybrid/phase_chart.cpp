@@ -15,8 +15,8 @@ class SingleChart final : public PhaseChart {
   explicit SingleChart(const ContactChart& c) : c_(c) {}
   bool applies(const Modes& modes) const override { return modes.K == 1 && closed(modes[0]); }
   int dim(const Modes& modes) const override { return c_.dim(mode_of(modes)); }
-  void enter(const Modes& modes, VecIn q, VecIn v, VecOut p, VecOut pd, std::span<double> lengths,
-             std::span<int> copies) override {
+  void enter(const Modes& modes, double, VecIn q, VecIn v, VecOut p, VecOut pd,
+             std::span<double> lengths, std::span<int> copies) override {
     mode_ = mode_of(modes);
     c_.chart(mode_, q, v, anchor_, p, pd);
     const ChartScales s = c_.scales(mode_);
@@ -25,7 +25,7 @@ class SingleChart final : public PhaseChart {
     for (std::size_t i = 0; i < copies.size(); ++i)
       copies[i] = i < s.copies.size() ? s.copies[i] : -1;
   }
-  void embed(VecIn p, VecIn pd, VecOut q, VecOut v) const override {
+  void embed(double, VecIn p, VecIn pd, VecOut q, VecOut v) const override {
     c_.embed(mode_, anchor_, p, pd, q, v);
   }
   void reduce(VecIn p, VecIn pd, VecIn q, VecIn a, VecOut pdd) const override {
@@ -48,15 +48,15 @@ class MultiChart final : public PhaseChart {
   explicit MultiChart(const RingChart& c) : c_(c) {}
   bool applies(const Modes& modes) const override { return c_.applies(modes.span()); }
   int dim(const Modes& modes) const override { return c_.dim(modes.span()); }
-  void enter(const Modes& modes, VecIn q, VecIn v, VecOut p, VecOut pd, std::span<double> lengths,
-             std::span<int> copies) override {
+  void enter(const Modes& modes, double t, VecIn q, VecIn v, VecOut p, VecOut pd,
+             std::span<double> lengths, std::span<int> copies) override {
     modes_ = modes;
     c_.plan(modes_.span(), plan_);  // the modes' eliminations, for every rhs of the phase
-    c_.chart(modes_.span(), plan_, q, v, anchor_, p, pd);
+    c_.chart(modes_.span(), plan_, t, q, v, anchor_, p, pd);
     c_.lengths(modes_.span(), plan_, lengths, copies);
   }
-  void embed(VecIn p, VecIn pd, VecOut q, VecOut v) const override {
-    c_.embed(modes_.span(), plan_, anchor_, p, pd, q, v);
+  void embed(double t, VecIn p, VecIn pd, VecOut q, VecOut v) const override {
+    c_.embed(modes_.span(), plan_, anchor_, t, p, pd, q, v);
   }
   void reduce(VecIn, VecIn, VecIn q, VecIn a, VecOut pdd) const override {
     c_.reduce(modes_.span(), plan_, q, a, pdd);

@@ -22,14 +22,15 @@ class PhaseChart {
   virtual bool applies(const Modes& modes) const = 0;
   /// The number of reduced coordinates of `modes` (applies(modes)).
   virtual int dim(const Modes& modes) const = 0;
-  /// Begins a phase of `modes` at a state (q, v) on its constraints: its reduced coordinates
-  /// p, p' (size dim) and, per reduced coordinate, the length an angle moves a contact point by
-  /// per radian (0: a copy of a full coordinate), which weights its error, and the full
+  /// Begins a phase of `modes` at time t and a state (q, v) on its constraints: its reduced
+  /// coordinates p, p' (size dim) and, per reduced coordinate, the length an angle moves a contact
+  /// point by per radian (0: a copy of a full coordinate), which weights its error, and the full
   /// coordinate a copy copies (-1 for an angle or when the chart does not say).
-  virtual void enter(const Modes& modes, VecIn q, VecIn v, VecOut p, VecOut pd,
+  virtual void enter(const Modes& modes, double t, VecIn q, VecIn v, VecOut p, VecOut pd,
                      std::span<double> lengths, std::span<int> copies) = 0;
-  /// The full state of reduced coordinates of the phase begun last.
-  virtual void embed(VecIn p, VecIn pd, VecOut q, VecOut v) const = 0;
+  /// The full state at time t of reduced coordinates of the phase begun last (t matters where a
+  /// constraint depends on time: stick at a prescribed spin, ring_chart.hpp).
+  virtual void embed(double t, VecIn p, VecIn pd, VecOut q, VecOut v) const = 0;
   /// p'' of a full acceleration a that satisfies the constraints at acceleration level, at the
   /// embedded state q.
   virtual void reduce(VecIn p, VecIn pd, VecIn q, VecIn a, VecOut pdd) const = 0;

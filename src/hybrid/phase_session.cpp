@@ -156,9 +156,9 @@ PhaseSession::PhaseSession(const PhaseContext& ctx, const SessionSettings& s, Se
   session_ = std::make_unique<CvodeSession>(c, cb);
 }
 
-void PhaseSession::to_full(const double* y, Vec& q, Vec& v) const {
+void PhaseSession::to_full(double t, const double* y, Vec& q, Vec& v) const {
   if (chart_) {
-    chart_->embed(CMap(y, dim_), CMap(y + dim_, dim_), q, v);
+    chart_->embed(t, CMap(y, dim_), CMap(y + dim_, dim_), q, v);
   } else {
     q = CMap(y, n_);
     v = CMap(y + n_, n_);
@@ -168,8 +168,8 @@ void PhaseSession::to_full(const double* y, Vec& q, Vec& v) const {
 void PhaseSession::restart(double t, Vec& q, Vec& v, const Works& w, double t_stop) {
   if (kind_ == SessionKind::Projected) query_.place(t, q, v, ctx_.modes, ctx_.laws, ctx_.tol);
   if (chart_) {
-    chart_->enter(ctx_.modes, q, v, p_, pd_, lengths_, copies_);
-    chart_->embed(p_, pd_, q, v);
+    chart_->enter(ctx_.modes, t, q, v, p_, pd_, lengths_, copies_);
+    chart_->embed(t, p_, pd_, q, v);
     VMap(ys_.data(), dim_) = p_;
     VMap(ys_.data() + dim_, dim_) = pd_;
     // error weights of this phase's coordinates: a copied coordinate as the coordinate it
@@ -198,13 +198,13 @@ void PhaseSession::restart(double t, Vec& q, Vec& v, const Works& w, double t_st
 
 CvodeSession::Status PhaseSession::advance(double tout, double& t, Vec& q, Vec& v, bool one_step) {
   const CvodeSession::Status st = session_->advance(tout, t, ys_.data(), one_step);
-  to_full(ys_.data(), q, v);
+  to_full(t, ys_.data(), q, v);
   return st;
 }
 
 void PhaseSession::interpolate(double t, Vec& q, Vec& v) const {
   session_->dky(t, 0, scratch_.data());
-  to_full(scratch_.data(), q, v);
+  to_full(t, scratch_.data(), q, v);
   if (kind_ == SessionKind::Projected) query_.place(t, q, v, ctx_.modes, ctx_.laws, ctx_.tol);
 }
 
@@ -445,7 +445,7 @@ int PhaseSession::rhs_reduced(double t, const double* y, double* yd, void* user)
   const CMap p(y, d), pd(y + d, d);
   Vec& q = self->q_rhs_;
   Vec& v = self->v_rhs_;
-  self->chart_->embed(p, pd, q, v);
+  self->chart_->embed(t, p, pd, q, v);
   PhaseEval& e = self->rhs_;
   if (!e.dynamics(t, q, v, self->ctx_.modes, self->ctx_.laws))
     return 1;  // recoverable: CVODE retries with a smaller step
@@ -476,7 +476,7 @@ int PhaseSession::roots(double t, const double* y, double* g, void* user) {
   Vec& q = self->q_roots_;
   Vec& v = self->v_roots_;
   PhaseEval& e = self->roots_;
-  self->to_full(y, q, v);
+  self->to_full(t, y, q, v);
   // the witnesses of a contact phase are functions on its constraint manifold: a Reduced state
   // is on it by construction, a Projected one is projected first
   switch (self->kind_) {

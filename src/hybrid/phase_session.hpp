@@ -135,7 +135,7 @@ class PhaseSession {
   }
 
  private:
-  void to_full(const double* y, Vec& q, Vec& v) const;
+  void to_full(double t, const double* y, Vec& q, Vec& v) const;
   /// Coordinate::length of the model's coordinate i: its error weight's length.
   double length_of(int i) const {
     const auto& c = m_.coordinates();

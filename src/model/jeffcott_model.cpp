@@ -12,8 +12,27 @@ std::string_view to_string(TorqueLaw l) {
   return l == TorqueLaw::Linear ? "linear" : "constant";
 }
 
+namespace {
+/// The contact's geometry: the disc centre inside the ring (x_s, y_s), or the fixed ring at the
+/// origin.
+RingContact jeffcott_geometry(const JeffcottParams& p) {
+  RingContact g;
+  g.ix = {JeffcottModel::XR, -1};
+  g.iy = {JeffcottModel::YR, -1};
+  g.w = {1.0, 0.0};
+  g.ring = p.stator.rigid ? -1 : JeffcottModel::XS;
+  g.gap = p.stator.gap;
+  g.radius = p.rotor.radius;
+  return g;
+}
+}  // namespace
+
 JeffcottModel::JeffcottModel(const JeffcottParams& p)
-    : p_(p), n_(p.stator.rigid ? 3 : 5), chart_(p.stator.gap, p.rotor.radius, p.stator.rigid) {
+    : p_(p),
+      n_(p.stator.rigid ? 3 : 5),
+      chart_(p.stator.gap, p.rotor.radius, p.stator.rigid),
+      geom_(jeffcott_geometry(p)),
+      ring_chart_(n_, TH, {geom_}) {
   using R = CoordinateRole;
   coords_ = {
       {"x_r", "vx_r", "vx_r", "m", "disc centre (seal circle), horizontal", R::RotorX, 0},
@@ -139,16 +158,8 @@ void JeffcottModel::smooth_force_jacobians(double /*t*/, VecIn q, VecIn v, MatOu
 
 void JeffcottModel::compute_contact(int /*k*/, double /*t*/, VecIn q, VecIn v,
                                     ContactKinematics& c) const {
-  // the disc centre inside the ring (x_s, y_s), or the fixed ring at the origin
-  RingContact g;
-  g.ix = {XR, -1};
-  g.iy = {YR, -1};
-  g.w = {1.0, 0.0};
-  g.ring = n_ == 5 ? XS : -1;
-  g.gap = p_.stator.gap;
-  g.radius = p_.rotor.radius;
   for (int i = 0; i < n_; ++i) c.W_N[i] = c.W_T[i] = 0.0;
-  ring_contact_kinematics(g, TH, q, v, c);
+  ring_contact_kinematics(geom_, TH, q, v, c);
 }
 
 double JeffcottModel::kinetic_energy(double /*t*/, VecIn q, VecIn v) const {

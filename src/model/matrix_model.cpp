@@ -188,7 +188,8 @@ MatrixModel::MatrixModel(const MatrixParams& p)
   xs_ = nodes_[0].xs;
   ys_ = nodes_[0].ys;
   sprung_ = nodes_[0].sprung();
-  if (K_ > 1) {  // the K-contact chart: each node's (x, y) and its ring (x_s_k, y_s_k adjacent)
+  {  // the ring chart: each node's (x, y) and its ring (x_s_k, y_s_k adjacent); with one node
+     // the event solver uses chart_, a prescribed spin this one
     std::vector<RingContact> rc;
     for (const Node& nd : nodes_) {
       RingContact c;

@@ -39,8 +39,8 @@ PrescribedSpin::PrescribedSpin(std::unique_ptr<LagrangianModel> inner, double t0
   n_ = inner_->num_dofs() - 1;
   for (int i = 0; i <= n_; ++i)
     if (i != s_) coords_.push_back(inner_->coordinates()[static_cast<std::size_t>(i)]);
-  // the inner K-contact chart with the spin dropped: every index above s_ moves down by one; a
-  // point or ring that involves the spin cannot be charted (it would move with theta(t))
+  // the inner ring chart with the spin dropped: every index above s_ moves down by one; a point
+  // or ring that involves the spin cannot be charted (it would move with theta(t))
   if (const RingChart* inner_chart = inner_->ring_chart()) {
     std::vector<RingContact> rc = inner_chart->contacts();
     bool ok = true;
@@ -57,7 +57,8 @@ PrescribedSpin::PrescribedSpin(std::unique_ptr<LagrangianModel> inner, double t0
       if (c.ring >= 0 && (c.ring == s_ || c.ring + 1 == s_)) ok = false;
       shift(c.ring);
     }
-    if (ok) ring_chart_.emplace(n_, -1, std::move(rc));  // no spin: sliding contacts only
+    // no spin coordinate: theta(t) is the prescription's, the stick constraint rheonomic
+    if (ok) ring_chart_.emplace(n_, -1, std::move(rc), SpinLaw{t0_, theta0_, omega0_, alpha_});
   }
 }
 

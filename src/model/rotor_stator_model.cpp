@@ -100,7 +100,7 @@ RotorStatorModel::RotorStatorModel(const RotorStatorParams& p)
     c.gap = pl.gap;
     c.radius = pl.radius;
   }
-  if (planes_.size() > 1) {
+  {  // every plane, one included (a prescribed spin charts the paper's plane with it)
     std::vector<RingContact> rc;
     for (const Plane& pl : planes_) rc.push_back(pl.geom);
     ring_chart_.emplace(n_, TH, std::move(rc));

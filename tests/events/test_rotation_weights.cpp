@@ -210,7 +210,7 @@ TEST_CASE("Rotations: a chart's copies are the coordinates it copies", "[events]
     const int dim = ch->dim(modes);
     Vec p(dim), pd(dim);
     RingAnchor anchor{};
-    ch->chart(modes, pl, q, v, anchor, p, pd);
+    ch->chart(modes, pl, 0.0, q, v, anchor, p, pd);
     std::vector<double> len(static_cast<std::size_t>(dim));
     std::vector<int> copies(static_cast<std::size_t>(dim));
     ch->lengths(modes, pl, len, copies);

@@ -462,13 +462,18 @@ TEST_CASE(
         last = dist;
       }
       CHECK(periods == 41);
-      // The run settles on the computed map's fixed point, within Newton's residual (here the
-      // closed form's, 3.8e-10 and 4.5e-10, below tol) amplified by 1 / (1 - |mu|) of the
-      // slowest mode (|mu| = 0.82 and 0.47) and the modes' non-orthogonality: measured at most
-      // 4.7e-9 (sprung, settling at 3.5e-9) and 4.5e-10 (rigid), never growing. Bound: the
-      // default tol, and no drift over the last 20 periods.
+      // The run settles on the computed map's fixed point, within Newton's residual amplified
+      // by 1 / (1 - |mu|) of the slowest mode (|mu| = 0.82 and 0.47) and the modes'
+      // non-orthogonality: measured at most 4.0e-10 (sprung, settling at 2.6e-10) and 3.4e-12
+      // (rigid: its sliding phase is one angle on the fixed ring, and the distance is the
+      // integration noise of a period, 1.3e-12 .. 3.4e-12, up and down from period to period).
+      // Bound: the default tol, and no drift over the last 20 periods: the distance does not
+      // grow by more than 10 %, or stays within the integrator's tolerance of a position in
+      // these scaled units (atol / L + rtol: 1e-15 m over the gap scale D[0] = 2e-4 m, plus
+      // 1e-12, 6e-12), where it is noise.
       CHECK(worst <= OrbitOptions{}.tol);
-      CHECK(last <= 1.1 * at20);
+      INFO("worst " << worst << " at20 " << at20 << " last " << last);
+      CHECK((last <= 1.1 * at20 || last <= 1e-15 / D[0] + 1e-12));
     }
     {  // the saddle
       const OrbitResult o = find_forced_orbit(map, orbit_state(p, roots[1]), T, p.Omega, {});

@@ -8,6 +8,7 @@
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <string>
 
 #include "rubdyn/analysis/postprocess.hpp"
@@ -85,10 +86,111 @@ TEST_CASE("Prescribed spin: the planes' centres and the ring chart of the wrappe
     }
     CHECK(a.ring == (b.ring > s ? b.ring - 1 : b.ring));
   }
+  // sliding and sticking contacts are charted: the rolling constraint depends on time through
+  // theta(t) (rheonomic, checked below)
   const Phase slip[] = {Phase::SlipNeg, Phase::SlipPos};
   const Phase stick[] = {Phase::Stick, Phase::SlipPos};
   CHECK(chart->applies(slip));
-  CHECK_FALSE(chart->applies(stick));
+  CHECK(chart->applies(stick));
+  REQUIRE(chart->spin_law().has_value());
+  CHECK(chart->spin_law()->omega(t) == ps->omega(t));
+}
+
+TEST_CASE(
+    "Prescribed spin: the rheonomic ring chart is a motion on every closed contact's "
+    "constraint",
+    "[unit][planes][prescribed][chart]") {
+  // The chart's sticking contacts at a prescribed spin (contact/ring_chart.hpp): phi_k(t) =
+  // phi_k0 - (R_k / g_k)(theta(t) - theta(t_a)). A reduced motion p(t) = p0 + pd0 s + pdd0 s^2 / 2
+  // (s = t - tc) embedded at tc and tc +- h must be a motion of the full model on the closed
+  // contacts' constraints: d_N = v_N = 0, and v_t = 0 in stick, at each time (the model's own
+  // kinematics, with the prescribed share -R omega(t) of v_t); the central differences of the
+  // embedded positions are the embedded velocities, and those of the velocities satisfy the
+  // constraints at acceleration level, W a + wdot = 0 (wdot with the spin's acceleration alpha).
+  // The spin ramps (alpha = -3e4 rad/s^2 from 300 rad/s, through 0 at 10 ms), so that a chart
+  // without the time (theta frozen at theta(t_a), or omega(t_a), or alpha left out of wdot)
+  // fails one of them.
+  const CaseSpec spec =
+      parse_case(prescribed_two_plane(), "two-plane.toml",
+                 {"loads.spin_accel=-3e4", "initial.theta=0.3", "initial.omega0=300"});
+  const auto model = build_model(spec);
+  const auto* ps = dynamic_cast<const PrescribedSpin*>(model.get());
+  REQUIRE(ps != nullptr);
+  const RingChart& chart = *model->ring_chart();
+  const int n = model->num_dofs();
+  ContactKinematics c(n);
+  std::mt19937_64 rng(11);
+  const auto u = [&] { return std::uniform_real_distribution<double>(-1.0, 1.0)(rng); };
+  using P = Phase;
+  const std::vector<std::vector<Phase>> all = {{P::Stick, P::Free},
+                                               {P::Free, P::Stick},
+                                               {P::Stick, P::SlipPos},
+                                               {P::SlipNeg, P::Stick},
+                                               {P::Stick, P::Stick}};
+  // a rolling contact's angle turns at (R / g) |omega| = 500 x 300 = 1.5e5 rad/s: over h = 1e-9 s
+  // by 1.5e-4 rad, so that the differences' O(h^2) error, (phi' h)^2 / 6 relative, is 4e-9
+  const double h = 1e-9;
+  for (const auto& modes : all) {
+    REQUIRE(chart.applies(modes));
+    const int d = chart.dim(modes);
+    int removed = 0;
+    for (Phase m : modes) removed += m == P::Free ? 0 : (m == P::Stick ? 2 : 1);
+    CHECK(d == n - removed);
+    std::vector<double> L(static_cast<std::size_t>(d));
+    chart.lengths(modes, L);
+    for (int trial = 0; trial < 20; ++trial) {
+      INFO(to_string(modes[0]) << ", " << to_string(modes[1]) << " trial " << trial);
+      Vec p(d), pd(d), pdd(d);
+      for (int j = 0; j < d; ++j) {
+        const bool angle = L[static_cast<std::size_t>(j)] > 0.0;  // a sliding contact's phi
+        p[j] = angle ? 3.0 * u() : 1e-4 * u();
+        pd[j] = angle ? 500.0 * u() : 0.1 * u();
+        pdd[j] = angle ? 1e6 * u() : 1e4 * u();
+      }
+      RingAnchor anchor;
+      anchor.t0 = 0.005 + 0.005 * u();
+      for (double& a : anchor.phi0) a = 3.0 * u();
+      const double tc = anchor.t0 + 0.01 * std::abs(u());  // up to 3 rad of spin since t_a
+      Vec q0(n), v0(n), qp(n), vp(n), qm(n), vm(n);
+      chart.embed(modes, anchor, tc, p, pd, q0, v0);
+      const Vec pp = p + pd * h + 0.5 * h * h * pdd, pm = p - pd * h + 0.5 * h * h * pdd;
+      const Vec pdp = pd + h * pdd, pdm = pd - h * pdd;
+      chart.embed(modes, anchor, tc + h, pp, pdp, qp, vp);
+      chart.embed(modes, anchor, tc - h, pm, pdm, qm, vm);
+      const Vec a = (vp - vm) / (2.0 * h);
+      // the velocity of the embedded motion: O(h^2), 4e-9 relative, plus the round-off of
+      // positions of 1e-4 m differenced over 2h (1e-20 / 2e-9 = 5e-12 m/s) against speeds of up
+      // to R omega = 0.05 x 300 = 15 m/s: 1e-7 of the largest speed bounds both
+      const double vmax = v0.cwiseAbs().maxCoeff();
+      CHECK(((qp - qm) / (2.0 * h) - v0).cwiseAbs().maxCoeff() < 1e-7 * vmax);
+      for (int k = 0; k < 2; ++k) {
+        const Phase mk = modes[static_cast<std::size_t>(k)];
+        if (mk == P::Free) continue;
+        INFO("contact " << k);
+        model->compute_contact(k, tc, q0, v0, c);
+        // as in test_ring_chart.cpp: a few ulps of the 1e-4 m positions, and of the fastest
+        // speed (15 m/s rolling) at velocity level
+        CHECK(std::abs(c.d_N) < 1e-18);
+        CHECK(std::abs(c.v_N) < 1e-14 * vmax);
+        if (mk == P::Stick) CHECK(std::abs(c.v_t) < 1e-14 * vmax);
+        // acceleration level: the rolling ring's g phi'^2 up to 1e-4 x 1.5e5^2 = 2e6 m/s^2
+        // from velocities of 15 m/s differenced over 2h: round-off 1e-15 x 15 / 2e-9 = 8e-6
+        // m/s^2, O(h^2) 4e-9 relative; 1e-6 of the largest acceleration bounds both (a W . a
+        // sums terms of that size)
+        const double amax = a.cwiseAbs().maxCoeff();
+        CHECK(std::abs(c.W_N.dot(a) + c.wdot_N) < 1e-6 * amax);
+        if (mk == P::Stick) CHECK(std::abs(c.W_T.dot(a) + c.wdot_T) < 1e-6 * amax);
+      }
+      // chart of the embedded state at tc, embedded again at tc: the same state
+      Vec p2(d), pd2(d), q2(n), v2(n);
+      RingAnchor a2;
+      chart.chart(modes, tc, q0, v0, a2, p2, pd2);
+      CHECK(a2.t0 == tc);
+      chart.embed(modes, a2, tc, p2, pd2, q2, v2);
+      CHECK((q2 - q0).cwiseAbs().maxCoeff() < 1e-18);
+      CHECK((v2 - v0).cwiseAbs().maxCoeff() < 1e-14 * vmax);
+    }
+  }
 }
 
 TEST_CASE("Prescribed spin: the event solver's sliding phases in minimal coordinates",

@@ -57,7 +57,7 @@ struct Fixture {
     for (int j = 0; j < d; ++j) {
       Vec p = Vec::Zero(d), pd = Vec::Zero(d);
       pd[j] = 1.0;
-      chart.embed(modes, anchor, p, pd, q, v);
+      chart.embed(modes, anchor, 0.0, p, pd, q, v);
       if (v[kSpin] == 1.0) return j;
     }
     return -1;
@@ -110,7 +110,7 @@ TEST_CASE(
         Vec p, pd, q(n), v(n);
         RingAnchor anchor;
         f.random_state(modes, p, pd, anchor);
-        f.chart.embed(modes, anchor, p, pd, q, v);
+        f.chart.embed(modes, anchor, 0.0, p, pd, q, v);
         for (int k = 0; k < 2; ++k) {
           const Phase mk = modes[static_cast<std::size_t>(k)];
           if (mk == Phase::Free) continue;
@@ -134,8 +134,8 @@ TEST_CASE(
         // chart of the embedded state, embedded again: the same state (the anchor is re-taken)
         Vec p2(p.size()), pd2(pd.size()), q2(n), v2(n);
         RingAnchor a2;
-        f.chart.chart(modes, q, v, a2, p2, pd2);
-        f.chart.embed(modes, a2, p2, pd2, q2, v2);
+        f.chart.chart(modes, 0.0, q, v, a2, p2, pd2);
+        f.chart.embed(modes, a2, 0.0, p2, pd2, q2, v2);
         // positions of 1e-4 m and the spin of up to 60 rad: atan2 and cos/sin of the angles
         // recover the ring to a few ulps of the spin's size times R / g for rolling angles
         CHECK((q2 - q).cwiseAbs().maxCoeff() < 1e-12 * (1.0 + std::abs(q[Fixture::kSpin])));
@@ -167,11 +167,11 @@ TEST_CASE("Ring chart: reduce is the second derivative of the embedding along a 
         Vec pdd(d);
         for (int j = 0; j < d; ++j) pdd[j] = 1e4 * f.u();
         Vec q0(n), v0(n), qp(n), vp(n), qm(n), vm(n);
-        f.chart.embed(modes, anchor, p, pd, q0, v0);
+        f.chart.embed(modes, anchor, 0.0, p, pd, q0, v0);
         const Vec pp = p + pd * h + 0.5 * h * h * pdd, pm = p - pd * h + 0.5 * h * h * pdd;
         const Vec pdp = pd + h * pdd, pdm = pd - h * pdd;
-        f.chart.embed(modes, anchor, pp, pdp, qp, vp);
-        f.chart.embed(modes, anchor, pm, pdm, qm, vm);
+        f.chart.embed(modes, anchor, 0.0, pp, pdp, qp, vp);
+        f.chart.embed(modes, anchor, 0.0, pm, pdm, qm, vm);
         const Vec a = (vp - vm) / (2.0 * h);
         Vec back(d);
         f.chart.reduce(modes, q0, a, back);
@@ -239,10 +239,14 @@ TEST_CASE(
   CHECK(one_ring.applies(Modes{P::SlipPos, P::Free}));
   CHECK_FALSE(one_ring.applies(Modes{P::SlipPos, P::SlipNeg}));
   CHECK_FALSE(one_ring.applies(Modes{P::Free, P::SlipNeg}));  // its ring is contact 0's
-  // no spin coordinate (a prescribed speed): slip composes, stick does not
+  // no spin coordinate and no prescribed spin: slip composes, stick does not (nothing says how
+  // the contact rolls); with a prescribed spin, stick composes too (test_prescribed_planes.cpp)
   const RingChart no_spin(9, -1, {rc[0], rc[1]});
   CHECK(no_spin.applies(Modes{P::SlipPos, P::SlipNeg}));
   CHECK_FALSE(no_spin.applies(Modes{P::Stick, P::Free}));
+  const RingChart prescribed(9, -1, {rc[0], rc[1]}, SpinLaw{0.0, 0.0, 300.0, 0.0});
+  CHECK(prescribed.applies(Modes{P::Stick, P::Free}));
+  CHECK(prescribed.dim(Modes{P::Stick, P::SlipPos}) == 9 - 2 - 1);
   // a rotor point that moves with another closed contact's ring
   std::vector<RingContact> chained = {rc[0], rc[1]};
   chained[1].ix = {5, -1};

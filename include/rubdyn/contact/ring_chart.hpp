@@ -26,10 +26,18 @@
 // two fixed planes of the rigid rotor at different positions eliminate x_b, x_r (and y_b, y_r);
 // a third fixed plane, or two at one position, do not (redundant or over-determined).
 //
+// A PRESCRIBED SPIN (no spin coordinate; theta(t) a given function of time, model/
+// prescribed_spin.hpp) makes the stick constraint rheonomic:
+//     phi_k(t) = phi_k0 - (R_k / g_k)(theta(t) - theta(t_a)),   phi_k' = -(R_k / g_k) omega(t),
+// t_a the time the phase began. The chart then takes the time (chart and embed), sticking
+// contacts remove two coordinates each as with a spin coordinate, and theta(t) - theta(t_a) is
+// computed as (t - t_a)(omega0 + alpha ((t - t0) + (t_a - t0)) / 2), not as a difference of two
+// large angles.
+//
 // The chart does not apply (the integrator uses the projection formulation for that phase): to a
-// ring shared by two closed contacts, to stick without a spin coordinate (a prescribed speed
-// makes the rolling constraint depend on time), to a rotor point that moves with the spin or
-// with a closed contact's sprung ring, and to fixed rings whose equations are rank-deficient.
+// ring shared by two closed contacts, to stick with neither a spin coordinate nor a prescribed
+// spin, to a rotor point that moves with the spin or with a closed contact's sprung ring, and to
+// fixed rings whose equations are rank-deficient.
 //
 // Reduced coordinates p of a mode tuple: the model's coordinates in their order without the
 // closed contacts' ring coordinates and the fixed rings' pivots (the spin stored as theta - theta0
@@ -39,6 +47,7 @@
 // p'' (the copied coordinates' a, and phi_k'' = (-sin phi, cos phi) . (P'' - S'') / g_k, S'' = 0
 // for a fixed ring). Nothing here allocates.
 #include <array>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -55,15 +64,29 @@ inline constexpr double kRingChartPivot = 1e-9;
 /// What the chart keeps of the state where a phase began (the sticking contacts' angles).
 struct RingAnchor {
   static constexpr int kMax = kMaxContacts;
-  double theta0 = 0.0;
+  double theta0 = 0.0;  ///< the spin angle where the phase began (a spin coordinate's)
+  double t0 = 0.0;      ///< the time the phase began (a prescribed spin's theta(t_a))
   std::array<double, kMax> phi0{};
+};
+
+/// A spin that is a given function of time: theta(t) = theta0 + omega0 (t - t0) + alpha (t -
+/// t0)^2 / 2 (model/prescribed_spin.hpp).
+struct SpinLaw {
+  double t0 = 0.0, theta0 = 0.0, omega0 = 0.0, alpha = 0.0;
+  double omega(double t) const { return omega0 + alpha * (t - t0); }
+  /// theta(t) - theta(ta), without cancellation.
+  double advance(double ta, double t) const {
+    return (t - ta) * (omega0 + 0.5 * alpha * ((t - t0) + (ta - t0)));
+  }
 };
 
 class RingChart {
  public:
-  /// n: the model's coordinates; spin: the spin's index (-1: none, so no sticking contact is
-  /// charted); contacts: every contact of the model (at most RingAnchor::kMax).
-  RingChart(int n, int spin, std::vector<RingContact> contacts);
+  /// n: the model's coordinates; spin: the spin's index (-1: none); contacts: every contact of
+  /// the model (at most RingAnchor::kMax); law: the spin as a function of time when it is
+  /// prescribed (spin = -1). Without either, no sticking contact is charted.
+  RingChart(int n, int spin, std::vector<RingContact> contacts,
+            std::optional<SpinLaw> law = std::nullopt);
 
   int contact_count() const { return static_cast<int>(c_.size()); }
   /// Every contact's geometry, as given (a wrapper of the model builds its own chart from them).
@@ -90,12 +113,12 @@ class RingChart {
   bool applies(std::span<const Phase> modes) const;
   /// The number of reduced coordinates for `modes`: n - (closed contacts) - (sticking ones).
   int dim(std::span<const Phase> modes) const;
-  /// Reduced coordinates of a state on the constraints of `modes`, and the anchor.
-  void chart(std::span<const Phase> modes, VecIn q, VecIn v, RingAnchor& anchor, VecOut p,
+  /// Reduced coordinates of a state at time t on the constraints of `modes`, and the anchor.
+  void chart(std::span<const Phase> modes, double t, VecIn q, VecIn v, RingAnchor& anchor, VecOut p,
              VecOut pd) const;
-  /// The full state of reduced coordinates.
-  void embed(std::span<const Phase> modes, const RingAnchor& anchor, VecIn p, VecIn pd, VecOut q,
-             VecOut v) const;
+  /// The full state at time t of reduced coordinates (t matters with a prescribed spin only).
+  void embed(std::span<const Phase> modes, const RingAnchor& anchor, double t, VecIn p, VecIn pd,
+             VecOut q, VecOut v) const;
   /// p'' of a full acceleration a that satisfies the closed contacts' constraints at
   /// acceleration level, at the embedded state q.
   void reduce(std::span<const Phase> modes, VecIn q, VecIn a, VecOut pdd) const;
@@ -105,10 +128,12 @@ class RingChart {
   /// the sticking contacts), as ChartScales::length in contact_chart.hpp.
   void lengths(std::span<const Phase> modes, std::span<double> L) const;
   /// The same four with the plan of these very modes (plan(); checked against them).
-  void chart(std::span<const Phase> modes, const Plan& pl, VecIn q, VecIn v, RingAnchor& anchor,
-             VecOut p, VecOut pd) const;
-  void embed(std::span<const Phase> modes, const Plan& pl, const RingAnchor& anchor, VecIn p,
-             VecIn pd, VecOut q, VecOut v) const;
+  void chart(std::span<const Phase> modes, const Plan& pl, double t, VecIn q, VecIn v,
+             RingAnchor& anchor, VecOut p, VecOut pd) const;
+  void embed(std::span<const Phase> modes, const Plan& pl, const RingAnchor& anchor, double t,
+             VecIn p, VecIn pd, VecOut q, VecOut v) const;
+  /// The prescribed spin, if any.
+  const std::optional<SpinLaw>& spin_law() const { return law_; }
   void reduce(std::span<const Phase> modes, const Plan& pl, VecIn q, VecIn a, VecOut pdd) const;
   /// `copies` (empty, or one per reduced coordinate): the full coordinate each copy copies, -1
   /// for the angles (ChartScales::copies).
@@ -134,6 +159,7 @@ class RingChart {
 
   int n_, spin_;
   std::vector<RingContact> c_;
+  std::optional<SpinLaw> law_;
   std::vector<int> ring_owner_;  ///< per coordinate: the contact whose ring it is, or -1
 };
 

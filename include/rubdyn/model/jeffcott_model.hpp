@@ -27,6 +27,7 @@
 // phi = phi0 - (R / g0)(theta - theta0) (without the stator's two for a rigid stator).
 #include <vector>
 
+#include "rubdyn/contact/ring_chart.hpp"
 #include "rubdyn/model/lagrangian_model.hpp"
 #include "rubdyn/model/loads.hpp"
 
@@ -77,6 +78,9 @@ class JeffcottModel final : public LagrangianModel {
   const ContactLaw& contact_law(int /*k*/ = 0) const override { return p_.contact; }
   double contact_radius(int /*k*/ = 0) const override { return p_.rotor.radius; }
   const ContactChart* contact_chart() const override { return &chart_; }
+  /// The same contact as a ring chart's (the event solver uses contact_chart; a prescribed spin
+  /// wraps this one, contact/ring_chart.hpp).
+  const RingChart* ring_chart() const override { return &ring_chart_; }
   int spin_coordinate() const override { return TH; }
   /// Tied: (x_r, y_r) with the stator's mass, spring and damper added (no coordinates for a
   /// rigid stator: the rotor is pinned); Free: the rotor and the stator on their own supports.
@@ -110,6 +114,8 @@ class JeffcottModel final : public LagrangianModel {
   int n_;
   std::vector<Coordinate> coords_;
   Chart chart_;
+  RingContact geom_;  ///< the disc centre inside the ring (x_s, y_s), or the fixed ring
+  RingChart ring_chart_;
   double ms_ = 0, ks_ = 0, cs_ = 0;  // 0 for a rigid stator
 };
 

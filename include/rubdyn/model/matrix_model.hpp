@@ -230,7 +230,7 @@ class MatrixModel final : public LagrangianModel {
   int slot_;
   std::vector<int> others_;
   Chart chart_;
-  std::optional<RingChart> ring_chart_;  ///< several nodes: each node's (x, y) and ring
+  std::optional<RingChart> ring_chart_;  ///< every node's (x, y) and ring
 };
 
 }  // namespace rubdyn

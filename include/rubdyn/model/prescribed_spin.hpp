@@ -23,11 +23,10 @@
 // energy included.
 // Every service of the inner model is passed through in the wrapper's coordinates: the planes'
 // centres (plane_motion: a rigid rotor's [[plane]] point interpolates between B and R) and the
-// K-contact chart (ring_chart: the inner chart with the spin's index dropped, and no spin, so that
-// it charts sliding contacts only). Sticking contacts have no minimal coordinates here (the
-// rolling constraint ties the contact point to theta(t), a given function of time), nor has the
-// one-contact chart (contact_chart: its coordinates hold theta): the event-driven integrator
-// integrates those phases as the index-reduced DAE with projection.
+// ring chart (ring_chart: the inner chart with the spin's index dropped and theta(t) given, so
+// that a sticking contact's rolling constraint phi_k = phi_k0 - (R_k / g_k)(theta(t) - theta(t_a))
+// is rheonomic: contact/ring_chart.hpp). The one-contact chart (contact_chart: its coordinates
+// hold theta) is not passed through: every rotor model also has a ring chart for one contact.
 #include <memory>
 #include <optional>
 #include <vector>
@@ -93,8 +92,8 @@ class PrescribedSpin final : public LagrangianModel {
   int n_;  // inner dofs - 1
   double t0_, theta0_, omega0_, alpha_;
   std::vector<Coordinate> coords_;
-  /// The inner model's K-contact chart in these coordinates (none when the inner has none, or
-  /// when a contact's point or ring involves the spin coordinate).
+  /// The inner model's ring chart in these coordinates, with the prescription (none when the
+  /// inner has none, or when a contact's point or ring involves the spin coordinate).
   std::optional<RingChart> ring_chart_;
 };
 

@@ -203,7 +203,7 @@ class RotorStatorModel final : public LagrangianModel {
 
   RotorStatorParams p_;
   Chart chart_;
-  std::optional<RingChart> ring_chart_;  ///< several planes: each plane's point and ring
+  std::optional<RingChart> ring_chart_;  ///< every plane's point and ring
   double inv_ms_ = 1.0;                  // 1 / m_s of the single plane's ring
   bool single_ = true;                   // no planes: the paper's model
   bool chartable_ = true;                // one plane at R on a sprung ring: the chart applies
