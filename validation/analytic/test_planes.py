@@ -187,10 +187,12 @@ def test_event_solver_reproduces_the_two_plane_rolling_orbit(tmp_path):
     """The event-driven solver with two contacts (src/hybrid/event_driven.cpp), started on the
     closed-form orbit of the two-plane rotor rolling at both planes (the case of the test above):
     both planes stick at every sample, and each plane's F_N and F_T are (8.3) to the integrator's
-    tolerance. Measured over 5 ms: the largest relative F_N error and |F_T error| / F_N over both
-    planes, 3.7e-9 at rtol 1e-8, 1.6e-10 at rtol 1e-10, 3.3e-12 at rtol 1e-12 (about rtol, and
-    falling ~50x per two decades). The test: at rtol 1e-12 every error below 1e-10 (30x the
-    measured) and at least 10x below the rtol 1e-10 run's (measured 47x)."""
+    tolerance. Both planes stick at a prescribed spin: the phase is integrated in minimal
+    coordinates, the rolling constraint rheonomic (docs/minimal-coordinates.md 4.1). Measured
+    over 5 ms: the largest relative F_N error and |F_T error| / F_N over both planes, 1.4e-8 at
+    rtol 1e-8, 8.5e-10 at rtol 1e-10, 3.2e-12 at rtol 1e-12 (with the projection formulation:
+    3.6e-9, 1.5e-10, 3.2e-12). The test: at rtol 1e-12 every error below 1e-10 (30x the
+    measured) and at least 10x below the rtol 1e-10 run's (measured 270x)."""
     p = copy.deepcopy(TWO)
     for plane in p["planes"]:
         plane["mu"] = 0.5
