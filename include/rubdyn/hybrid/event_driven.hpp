@@ -24,8 +24,9 @@
 //            construction. CVODE Adams with fixed-point iteration (measured on the rolling
 //            regime: 4.4x fewer steps than BDF, no Jacobian); an angle's error is weighted by the
 //            displacement it causes, at the gap's scale. The projection formulation where the
-//            chart does not apply (a shared ring, rank-deficient fixed rings, stick at a
-//            prescribed speed, a model without a chart).
+//            chart does not apply (a shared ring, rank-deficient fixed rings, a model without
+//            a chart). At a prescribed speed the RingChart charts one contact too, its stick
+//            constraint rheonomic (the chart takes the time).
 //   projection: the index-reduced DAE in full coordinates, CVODE-BDF with projection after
 //            every step (positions onto d_N,k = 0, velocities onto v_N,k = 0 and v_t,k = 0 in
 //            stick, mass-weighted). Kept as an in-house cross-check.
