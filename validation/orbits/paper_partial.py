@@ -103,6 +103,27 @@ def match(a, b):
     return out
 
 
+def last_point_events(cli, out, folder, t0):
+    """The events over 1.02 periods of the branch's last smooth point (its state in branch.csv),
+    as (fraction of the period after the section, kind): where the branch ends, which event
+    approaches the section."""
+    import csv
+    with open(os.path.join(folder, "branch.csv")) as f:
+        row = list(csv.DictReader(f))[-1]
+    om = float(row["initial.omega0"])
+    T = 2 * math.pi / om
+    names = ["x_b", "y_b", "x_r", "y_r", "x_s", "y_s", "vx_b", "vy_b", "vx_r", "vy_r", "vx_s",
+             "vy_s"]
+    sets = [f"initial.{n}={float(row[n])!r}" for n in names]
+    sets += [f"initial.omega0={om!r}", f"initial.theta={om * t0!r}", f"run.t_end={1.02 * T!r}"]
+    cmd = [cli, "run", CASE, "--out", out, "--quiet"]
+    for x in sets:
+        cmd += ["--set", x]
+    run(cmd)
+    with open(os.path.join(out, "events.csv")) as f:
+        return om, [(float(e["t"]) / T, e["kind"]) for e in csv.DictReader(f)]
+
+
 def branch(cli, out, frm, down):
     cmd = [cli, "branch", CASE, "--from", frm, "--vary", "initial.omega0", "--points", "100",
            "--out", out] + (["--down"] if down else [])
@@ -171,8 +192,11 @@ def main():
         br = []
         if not a.no_branch:
             for down in (False, True):
-                j, w = branch(a.cli, os.path.join(tmp, "b" + ("down" if down else "up")), tr, down)
-                br.append((down, j, w))
+                folder = os.path.join(tmp, "b" + ("down" if down else "up"))
+                j, w = branch(a.cli, folder, tr, down)
+                last = last_point_events(a.cli, os.path.join(tmp, "last" + str(down)), folder,
+                                         o10["t0"])
+                br.append((down, j, w, last))
     lines = [
         "# The paper's rotor in partial rub: its periodic orbit and Floquet multipliers",
         "",
@@ -222,7 +246,7 @@ def main():
         + " |",
         "",
     ]
-    for down, j, w in br:
+    for down, j, w, (om_last, evs) in br:
         lines.append(f"**Continuation {'down' if down else 'up'}** (`rubdyn branch CASE --from RUN "
                      f"--vary initial.omega0 --points 100{' --down' if down else ''}`): "
                      f"{j['points']} points, outcome `{j['outcome']}`, {j['runs']} runs, {w:.1f} s: "
@@ -231,6 +255,9 @@ def main():
             at = (f"between points {s['between'][0]} and {s['between'][1]}"
                   if s["between"][1] is not None else f"after point {s['between'][0]}")
             lines.append(f"- {s['kind']} at {s['value']:.6f} rad/s ({at}): {s['how']}")
+        lines.append(f"- the last smooth point, {om_last:.7f} rad/s, run over 1.02 periods from its "
+                     "section state: " + ", ".join(f"{k} at {x:.5f} T" for x, k in evs)
+                     + " after the section (an event at 0 or 1 T is at the section itself)")
         lines.append("")
     if fails:
         lines += ["**FAILED**: " + "; ".join(fails), ""]
