@@ -89,6 +89,8 @@ class RingChart {
             std::optional<SpinLaw> law = std::nullopt);
 
   int contact_count() const { return static_cast<int>(c_.size()); }
+  /// The prescribed spin, if any (the spin then no coordinate).
+  const std::optional<SpinLaw>& spin_law() const { return law_; }
   /// Every contact's geometry, as given (a wrapper of the model builds its own chart from them).
   const std::vector<RingContact>& contacts() const { return c_; }
   /// Which coordinates the closed contacts of a mode tuple eliminate (built on the stack by
@@ -132,8 +134,6 @@ class RingChart {
              RingAnchor& anchor, VecOut p, VecOut pd) const;
   void embed(std::span<const Phase> modes, const Plan& pl, const RingAnchor& anchor, double t,
              VecIn p, VecIn pd, VecOut q, VecOut v) const;
-  /// The prescribed spin, if any.
-  const std::optional<SpinLaw>& spin_law() const { return law_; }
   void reduce(std::span<const Phase> modes, const Plan& pl, VecIn q, VecIn a, VecOut pdd) const;
   /// `copies` (empty, or one per reduced coordinate): the full coordinate each copy copies, -1
   /// for the angles (ChartScales::copies).
