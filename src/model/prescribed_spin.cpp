@@ -31,7 +31,7 @@ PrescribedSpin::Scratch& PrescribedSpin::scratch() const {
 
 PrescribedSpin::PrescribedSpin(std::unique_ptr<LagrangianModel> inner, double t0, double theta0,
                                double omega0, double alpha)
-    : inner_(std::move(inner)), t0_(t0), theta0_(theta0), omega0_(omega0), alpha_(alpha) {
+    : inner_(std::move(inner)), law_{t0, theta0, omega0, alpha} {
   s_ = inner_->spin_coordinate();
   if (s_ < 0)
     throw std::invalid_argument("a prescribed spin needs a model with a spin coordinate; '" +
@@ -58,13 +58,8 @@ PrescribedSpin::PrescribedSpin(std::unique_ptr<LagrangianModel> inner, double t0
       shift(c.ring);
     }
     // no spin coordinate: theta(t) is the prescription's, the stick constraint rheonomic
-    if (ok) ring_chart_.emplace(n_, -1, std::move(rc), SpinLaw{t0_, theta0_, omega0_, alpha_});
+    if (ok) ring_chart_.emplace(n_, -1, std::move(rc), law_);
   }
-}
-
-double PrescribedSpin::theta(double t) const {
-  const double dt = t - t0_;
-  return theta0_ + omega0_ * dt + 0.5 * alpha_ * dt * dt;
 }
 
 namespace {
@@ -102,14 +97,14 @@ void PrescribedSpin::embed(double t, VecIn q, VecIn v, Scratch& s) const {
 
 void PrescribedSpin::mass_matrix(VecIn q, MatOut M) const {
   Scratch& s = scratch();
-  insert(q, s_, theta0_, s.qf);  // (M without the spin's row and column does not depend on it)
+  insert(q, s_, law_.theta0, s.qf);  // (M without the spin's row and column does not depend on it)
   inner_->mass_matrix(s.qf, s.Mf);
   drop(s.Mf, s_, M);
 }
 
 void PrescribedSpin::mass_product(VecIn q, VecIn x, VecOut y) const {
   Scratch& s = scratch();
-  insert(q, s_, theta0_, s.qf);
+  insert(q, s_, law_.theta0, s.qf);
   insert(x, s_, 0.0, s.xf);
   inner_->mass_product(s.qf, s.xf, s.yf);
   drop(s.yf, s_, y);
@@ -117,7 +112,7 @@ void PrescribedSpin::mass_product(VecIn q, VecIn x, VecOut y) const {
 
 void PrescribedSpin::solve_mass(VecIn q, MatOut B) const {
   Scratch& s = scratch();
-  insert(q, s_, theta0_, s.qf);
+  insert(q, s_, law_.theta0, s.qf);
   if (inner_->solve_mass_without(s_, s.qf, B)) return;  // (the inner's block without the spin)
   // Else with the inner inverse [[A, u], [u^T, sigma]] (spin last, for the argument), the
   // inverse of the block without the spin is A - u u^T / sigma: the inner solve of (b, 0) gives
@@ -142,7 +137,7 @@ void PrescribedSpin::solve_mass(VecIn q, MatOut B) const {
 
 void PrescribedSpin::mass_matrix_product_jacobian(VecIn q, VecIn a, MatOut J) const {
   Scratch& s = scratch();
-  insert(q, s_, theta0_, s.qf);
+  insert(q, s_, law_.theta0, s.qf);
   insert(a, s_, 0.0, s.af);
   inner_->mass_matrix_product_jacobian(s.qf, s.af, s.Jf);
   drop(s.Jf, s_, J);
@@ -153,9 +148,9 @@ void PrescribedSpin::smooth_forces(double t, VecIn q, VecIn v, VecOut f) const {
   Scratch& s = scratch();
   embed(t, q, v, s);
   inner_->smooth_forces(t, s.qf, s.vf, s.ff);
-  if (alpha_ != 0.0) {
+  if (law_.alpha != 0.0) {
     s.xf.setZero();
-    s.xf[s_] = alpha_;
+    s.xf[s_] = law_.alpha;
     inner_->mass_product(s.qf, s.xf, s.yf);
     s.ff -= s.yf;
   }
@@ -167,9 +162,9 @@ void PrescribedSpin::smooth_force_jacobians(double t, VecIn q, VecIn v, MatOut d
   Scratch& s = scratch();
   embed(t, q, v, s);
   inner_->smooth_force_jacobians(t, s.qf, s.vf, s.dqf, s.dvf);
-  if (alpha_ != 0.0) {
+  if (law_.alpha != 0.0) {
     s.af.setZero();
-    s.af[s_] = alpha_;
+    s.af[s_] = law_.alpha;
     inner_->mass_matrix_product_jacobian(s.qf, s.af, s.Jf);
     s.dqf -= s.Jf;
   }
@@ -183,7 +178,7 @@ bool PrescribedSpin::newton_entries(double t, VecIn q, VecIn v, VecIn a, NewtonE
   // without the spin's row and column
   Scratch& s = scratch();
   embed(t, q, v, s);
-  insert(a, s_, alpha_, s.af);
+  insert(a, s_, law_.alpha, s.af);
   if (!inner_->newton_entries(t, s.qf, s.vf, s.af, s.ne)) return false;
   e.clear();
   const auto keep = [this](const std::vector<MatrixEntry>& in, std::vector<MatrixEntry>& out) {
@@ -211,8 +206,8 @@ void PrescribedSpin::compute_contact(int k, double t, VecIn q, VecIn v,
   c.v_t = s.cf.v_t;
   c.b_N = s.cf.b_N + wn * om;
   c.b_T = s.cf.b_T + wt * om;
-  c.wdot_N = s.cf.wdot_N + wn * alpha_;
-  c.wdot_T = s.cf.wdot_T + wt * alpha_;
+  c.wdot_N = s.cf.wdot_N + wn * law_.alpha;
+  c.wdot_T = s.cf.wdot_T + wt * law_.alpha;
   c.normal_defined = s.cf.normal_defined;
 }
 
@@ -246,7 +241,7 @@ double PrescribedSpin::drive_torque(double t, VecIn q, VecIn v, VecIn a,
   // tau_d = [M_f a_f]_theta - f_f,theta - sum_k (W_N,theta F_N + W_T,theta F_T) (header)
   Scratch& s = scratch();
   embed(t, q, v, s);
-  insert(a, s_, alpha_, s.af);
+  insert(a, s_, law_.alpha, s.af);
   double Ma, f;
   if (!inner_->spin_row(t, s.qf, s.vf, s.af, Ma, f)) {
     inner_->mass_product(s.qf, s.af, s.yf);

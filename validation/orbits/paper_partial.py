@@ -23,6 +23,7 @@ Writes validation/orbits/paper_partial.md; exits 1 if a check fails (a ctest).
     # about 15 s
 """
 import argparse
+import csv
 import json
 import math
 import os
@@ -66,7 +67,6 @@ def scale(name):
 
 def read_grid(folder, names, T, kmax):
     """The state at t = k T, k = 0 .. kmax, from timeseries.csv (the output grid holds them)."""
-    import csv
     want = {k: None for k in range(kmax + 1)}
     with open(os.path.join(folder, "timeseries.csv")) as f:
         for row in csv.DictReader(f):
@@ -107,7 +107,6 @@ def last_point_events(cli, out, folder, t0):
     """The events over 1.02 periods of the branch's last smooth point (its state in branch.csv),
     as (fraction of the period after the section, kind): where the branch ends, which event
     approaches the section."""
-    import csv
     with open(os.path.join(folder, "branch.csv")) as f:
         row = list(csv.DictReader(f))[-1]
     om = float(row["initial.omega0"])

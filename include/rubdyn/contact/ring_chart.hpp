@@ -73,6 +73,10 @@ struct RingAnchor {
 /// t0)^2 / 2 (model/prescribed_spin.hpp).
 struct SpinLaw {
   double t0 = 0.0, theta0 = 0.0, omega0 = 0.0, alpha = 0.0;
+  double theta(double t) const {
+    const double dt = t - t0;
+    return theta0 + omega0 * dt + 0.5 * alpha * dt * dt;
+  }
   double omega(double t) const { return omega0 + alpha * (t - t0); }
   /// theta(t) - theta(ta), without cancellation.
   double advance(double ta, double t) const {

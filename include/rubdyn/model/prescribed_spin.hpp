@@ -73,9 +73,9 @@ class PrescribedSpin final : public LagrangianModel {
   }
 
   /// theta(t), omega(t), alpha.
-  double theta(double t) const;
-  double omega(double t) const { return omega0_ + alpha_ * (t - t0_); }
-  double alpha() const { return alpha_; }
+  double theta(double t) const { return law_.theta(t); }
+  double omega(double t) const { return law_.omega(t); }
+  double alpha() const { return law_.alpha; }
   /// The torque that holds the speed at (t, q, v) with the accelerations a and contact forces F.
   double drive_torque(double t, VecIn q, VecIn v, VecIn a, const ContactForce* F) const;
   const LagrangianModel& inner() const { return *inner_; }
@@ -88,9 +88,9 @@ class PrescribedSpin final : public LagrangianModel {
   void embed(double t, VecIn q, VecIn v, Scratch& s) const;
 
   std::unique_ptr<LagrangianModel> inner_;
-  int s_;  // the inner spin coordinate
-  int n_;  // inner dofs - 1
-  double t0_, theta0_, omega0_, alpha_;
+  int s_;        // the inner spin coordinate
+  int n_;        // inner dofs - 1
+  SpinLaw law_;  ///< theta(t), omega(t), alpha (the ring chart's too)
   std::vector<Coordinate> coords_;
   /// The inner model's ring chart in these coordinates, with the prescription (none when the
   /// inner has none, or when a contact's point or ring involves the spin coordinate).
