@@ -256,8 +256,10 @@ py::tuple branch_case(const Case& c, const std::string& key, double to, int poin
 /// (orbit.json's text, the sampled period's columns, its events, its summary.json, the
 /// monodromy matrix, the CLI's exit code).
 py::tuple orbit_case(const Case& c, int periods, int settle, double tol, int max_iter, int samples,
-                     double period) {
+                     double period, bool sensitivities) {
+  static const SensitivityMonodromy sens;
   CaseOrbitOptions o;
+  if (sensitivities) o.orbit.provider = &sens;
   o.period = period;
   o.periods = periods;
   o.settle = settle;
@@ -604,6 +606,7 @@ PYBIND11_MODULE(_core, m) {
         py::arg("tol") = OrbitOptions{}.tol, py::arg("max_iter") = OrbitOptions{}.max_iterations,
         py::arg("samples") = OrbitOptions{}.samples,
         py::arg("period") = std::numeric_limits<double>::quiet_NaN(),
+        py::arg("sensitivities") = false,
         "(orbit_json, columns, events, summary_json, monodromy, exit_code) of `rubdyn orbit`");
   m.def("branch", &branch_case, py::arg("case"), py::arg("key"), py::arg("to"), py::arg("points"),
         py::arg("ds"), py::arg("ds_max"), py::arg("scale"), py::arg("down"), py::arg("tol"),

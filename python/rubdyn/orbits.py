@@ -82,14 +82,16 @@ def _case_with(case, overrides, rtol, atol, who):
 
 
 def orbit(case, periods=1, settle=0, tol=1e-8, max_iter=20, samples=200, rtol=None, atol=None,
-          overrides=None, period=None):
+          overrides=None, period=None, monodromy="differences"):
     """The case's forced orbit, as `rubdyn orbit CASE` finds it (the same C++ search and the same
     orbit.json), returned as an Orbit; nothing is written.
 
     case: a Case or a path. periods: k, the period is 2 pi k / omega0. period: a free spin's
     orbit (loads.spin = "torque", autonomous): the guess of its period [s]. settle: periods of a
     transient run before Newton. tol: Newton's tolerance (scaled by the gap and gap x omega0).
-    rtol, atol: the runs' tolerances (overrides of solver.rtol, solver.atol). A case without a
+    rtol, atol: the runs' tolerances (overrides of solver.rtol, solver.atol). monodromy:
+    "differences" (finite differences of the return map) or "sensitivities" (the flow's
+    variational equations and saltation matrices), as --monodromy. A case without a
     prescribed constant spin raises rubdyn.CaseError, as the CLI exits 2; a search that does not
     converge returns an Orbit whose outcome says why (exit_code 3)."""
     from . import _finite
@@ -99,10 +101,13 @@ def orbit(case, periods=1, settle=0, tol=1e-8, max_iter=20, samples=200, rtol=No
         raise ValueError(f"orbit: tol = {tol}: must be > 0")
     if period is not None:
         period = _finite(period, "orbit: period")
+    if monodromy not in ("differences", "sensitivities"):
+        raise ValueError(f"orbit: monodromy = {monodromy!r}: must be \"differences\" or "
+                         "\"sensitivities\"")
     text, columns, events, summary_json, monodromy, code = _core.orbit(
         case, _count(periods, "periods", 1), _count(settle, "settle", 0), tol,
         _count(max_iter, "max_iter", 1), _count(samples, "samples", 1),
-        float("nan") if period is None else period)
+        float("nan") if period is None else period, monodromy == "sensitivities")
     run = Result.from_core(columns, events, summary_json, case=case)
     return Orbit(json.loads(text), run, np.asarray(monodromy), code)
 

@@ -43,6 +43,22 @@ def test_orbit_is_the_cli_orbit(cli, tmp_path):
     assert orb.state["x_r"] == orb.run["x_r"][0]
 
 
+def test_orbit_from_sensitivities_is_the_cli_orbit(cli, tmp_path):
+    out = tmp_path / "s"
+    p = run_cli(cli, "orbit", FULL_RUB, "--out", str(out), "--monodromy", "sensitivities")
+    assert p.returncode == 0, p.stderr
+    with open(out / "orbit.json") as f:
+        from_cli = json.load(f)
+    orb = rubdyn.orbit(FULL_RUB, monodromy="sensitivities")
+    a, b = dict(orb), from_cli
+    a.pop("wall_seconds")
+    b.pop("wall_seconds")
+    assert a == b
+    assert orb["monodromy"]["method"].startswith("sensitivities")
+    with pytest.raises(ValueError):
+        rubdyn.orbit(FULL_RUB, monodromy="adjoint")
+
+
 def test_orbit_refuses_a_case_without_a_prescribed_spin():
     with pytest.raises(rubdyn.CaseError) as e:
         rubdyn.orbit(JEFFCOTT)

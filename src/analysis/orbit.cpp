@@ -11,6 +11,8 @@
 #include <limits>
 #include <numeric>
 
+#include "rubdyn/hybrid/flow_sensitivity.hpp"
+
 namespace rubdyn {
 
 namespace {
@@ -1087,6 +1089,55 @@ OrbitResult find_autonomous_orbit(const PeriodMap& map, VecIn guess, double T0, 
                 fmt::format("converged in {} Newton iterations, residual {:.3g}, period {:.10g} "
                             "s (phase condition on section coordinate {})",
                             res.history.size() - 1, res.residual, res.period, j + 1));
+}
+
+// ---- the monodromy from the flow's sensitivities ----------------------------------------------
+
+namespace {
+// The second solve's tolerance factor: the error estimate is the difference of the monodromies
+// at rtol and rtol / 100 (the coarser's error). Below kFinestRtol CVODE is asked for more
+// accuracy than double precision gives over a period; the pair is then rtol x 100 and rtol.
+constexpr double kSensitivityRtolFactor = 1e-2;
+constexpr double kSensitivityFinestRtol = 1e-13;
+}  // namespace
+
+Monodromy SensitivityMonodromy::compute(const PeriodMap& map, double T, const SectionChart& chart,
+                                        VecIn xi, const FlowRun& at) const {
+  Monodromy res;
+  if (!at.complete()) {
+    res.failure = "the orbit's run did not complete";
+    return res;
+  }
+  const Mat V0 = chart.tangent(xi);
+  const double rtol = map.options().rtol;
+  const double rtol_b = rtol * kSensitivityRtolFactor >= kSensitivityFinestRtol
+                            ? rtol * kSensitivityRtolFactor
+                            : rtol / kSensitivityRtolFactor;
+  const double fine = std::min(rtol, rtol_b), coarse = std::max(rtol, rtol_b);
+  const double t_end = map.t0() + T;
+  const FlowSensitivity a = flow_sensitivity(map.model(), map.options(), at.samples, at.events,
+                                             t_end, V0, chart.scale(), fine);
+  const FlowSensitivity b = a.ok ? flow_sensitivity(map.model(), map.options(), at.samples,
+                                                    at.events, t_end, V0, chart.scale(), coarse)
+                                 : a;
+  if (!a.ok || !b.ok) {
+    const FlowSensitivity& bad = a.ok ? b : a;
+    res.failure = "sensitivities: " + bad.why;
+    if (bad.not_smooth) {
+      res.sequence_changed = true;
+      res.sequence_note = bad.why;
+    }
+    return res;
+  }
+  const Mat C = chart.coords_jacobian();
+  res.M = C * a.V;
+  res.error = Eigen::JacobiSVD<Mat>(Mat(res.M - C * b.V)).singularValues()(0);
+  res.ok = true;
+  res.method = fmt::format(
+      "sensitivities: variational equations with saltation matrices at {} events, CVODE-BDF at "
+      "rtol {:.3g}; error: the difference from rtol {:.3g} ({} steps in all)",
+      a.events, fine, coarse, a.steps + b.steps);
+  return res;
 }
 
 }  // namespace rubdyn

@@ -30,6 +30,7 @@ struct OrbitArgs {
   int periods = 1, settle = 0, max_iter = OrbitOptions{}.max_iterations,
       samples = OrbitOptions{}.samples;
   double tol = OrbitOptions{}.tol;
+  std::string monodromy = "differences";
   std::optional<double> period;
 };
 
@@ -106,6 +107,8 @@ int orbit_command(const OrbitArgs& a) {
   opt.orbit.max_iterations = a.max_iter;
   opt.orbit.samples = a.samples;
   if (a.period) opt.period = *a.period;
+  static const SensitivityMonodromy sensitivities;
+  if (a.monodromy == "sensitivities") opt.orbit.provider = &sensitivities;
   if (bad.empty()) {
     const auto more = orbit_issues(spec, opt);
     bad.insert(bad.end(), more.begin(), more.end());
@@ -156,6 +159,10 @@ void add_orbit_command(CLI::App& app, Action& action) {
                   "Newton's tolerance on |P(x) - x| per state scale (gap g0, g0 omega0)");
   sub->add_option("--max-iter", a->max_iter, "Newton iterations at most");
   sub->add_option("--samples", a->samples, "samples of the orbit per period in orbit.csv");
+  sub->add_option("--monodromy", a->monodromy,
+                  "the final monodromy from finite differences of the return map (default) or "
+                  "from the flow's sensitivities (variational equations and saltation matrices)")
+      ->check(CLI::IsMember({"differences", "sensitivities"}));
   sub->add_option("--rtol", a->rtol, "the runs' relative tolerance (overrides solver.rtol)");
   sub->add_option("--atol", a->atol, "the runs' absolute tolerance (overrides solver.atol)");
   sub->footer(

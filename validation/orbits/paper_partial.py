@@ -53,9 +53,9 @@ def run(cmd):
     return p
 
 
-def orbit(cli, out, frm, rtol, atol):
+def orbit(cli, out, frm, rtol, atol, extra=()):
     run([cli, "orbit", CASE, "--from", frm, "--out", out, "--rtol", repr(rtol), "--atol",
-         repr(atol)])
+         repr(atol), *extra])
     with open(os.path.join(out, "orbit.json")) as f:
         return json.load(f)
 
@@ -148,7 +148,11 @@ def main():
             ts = json.load(f)
         o10 = orbit(a.cli, os.path.join(tmp, "o10"), tr, 1e-10, 1e-12)
         o12 = orbit(a.cli, os.path.join(tmp, "o12"), tr, 1e-12, 1e-15)
-        for o in (o10, o12):
+        # the same searches, the monodromy from the flow's sensitivities
+        sens = ["--monodromy", "sensitivities"]
+        s10 = orbit(a.cli, os.path.join(tmp, "s10"), tr, 1e-10, 1e-12, sens)
+        s12 = orbit(a.cli, os.path.join(tmp, "s12"), tr, 1e-12, 1e-15, sens)
+        for o in (o10, o12, s10, s12):
             if o["outcome"] != "converged":
                 fails.append(f"rtol search: {o['outcome']}: {o['message']}")
         if fails:
@@ -161,7 +165,13 @@ def main():
         worst = max(d / b for d, b in pairs)
         if worst > 1:
             fails.append(f"a multiplier differs between rtol 1e-10 and 1e-12 by {worst:.2f} bounds")
-        for o in (o10, o12):
+        # the sensitivities' multipliers against the finite differences' at the same rtol
+        spairs = match(s10["multipliers"], o10["multipliers"]) + match(s12["multipliers"],
+                                                                       o12["multipliers"])
+        sworst = max(d / b for d, b in spairs)
+        if sworst > 1:
+            fails.append(f"sensitivities and finite differences differ by {sworst:.2f} bounds")
+        for o in (o10, o12, s10, s12):
             if o["stability"] != "unstable":
                 fails.append(f"verdict {o['stability']} (expected unstable)")
             if o["sequence"] != "free | impact liftoff | free":
@@ -181,6 +191,7 @@ def main():
         # the linear prediction of the same quantity, |mu|^k |v| EPS, at the fit's end
         pred_end = abs(z) ** kmax * np.linalg.norm(v) * EPS
         rel = abs(growth / abs(z) - 1)
+        zs = complex(s12["multipliers"][0]["re"], s12["multipliers"][0]["im"])
         # the multiplier's error bound must cover the growth the transients measure: the fit's
         # own error (the stable components' remainder, the runs' noise at rtol 1e-12 against a
         # displacement of 1e-6) is far below it (measured 2e-7 against the bound 7e-5)
@@ -209,7 +220,8 @@ def main():
         "| rtol | outcome | Newton it. | residual | per period | max abs(mu) | its error | verdict | runs |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
-    for rt, o in (("1e-10", o10), ("1e-12", o12)):
+    for rt, o in (("1e-10", o10), ("1e-12", o12), ("1e-10, sensitivities", s10),
+                  ("1e-12, sensitivities", s12)):
         m0 = o["multipliers"][0]
         lines.append(f"| {rt} | {o['outcome']} | {len(o['newton']) - 1} | {o['residual']:.2e} | "
                      f"{o['sequence'].replace(' | ', ' / ')} | {m0['abs']:.6f} | {m0['error']:.1e} | {o['stability']} | "
@@ -229,6 +241,16 @@ def main():
         "",
         f"The two orbits' section states are {dist:.1e} apart (scaled: positions / g0, velocities "
         f"/ (g0 omega)); the largest distance / bounds {worst:.2f}.",
+        "",
+        "**From the flow's sensitivities** (`--monodromy sensitivities`: the variational "
+        "equations of the flights and the slide, the saltation matrices of the impact and the "
+        "lift-off, docs/orbits.md section 7): the same multipliers as the finite differences' at "
+        f"both tolerances within the sum of the two bounds (largest distance / bounds "
+        f"{sworst:.2f}), with bounds {s10['multipliers'][0]['error']:.1e} (rtol 1e-10) and "
+        f"{s12['multipliers'][0]['error']:.1e} (rtol 1e-12) on the unstable pair against the "
+        f"finite differences' {o10['multipliers'][0]['error']:.1e} and "
+        f"{o12['multipliers'][0]['error']:.1e}; its |mu| = {abs(zs):.9f} at rtol 1e-12, "
+        f"{abs(growth - abs(zs)):.1e} from the transients' growth below.",
         "",
         f"**The unstable pair against transients** (rtol 1e-12, displaced by {EPS:g} along the real "
         "and the imaginary part of the pair's direction, the run from the orbit subtracted): the "

@@ -50,6 +50,18 @@ def reference_multipliers(P, root, T):
     return ev, np.exp(ev * T)
 
 
+def compare(d, ref):
+    """The largest distance of orbit.json's multipliers to the nearest reference, the largest
+    error bound and their largest ratio."""
+    mus = np.array([complex(m["re"], m["im"]) for m in d["multipliers"]])
+    errs = np.array([m["error"] for m in d["multipliers"]])
+    dist = np.array([np.min(np.abs(ref - mu)) for mu in mus])
+    return float(np.max(dist)), float(np.max(errs)), float(np.max(dist / errs))
+
+
+SENS = ["--monodromy", "sensitivities"]
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--cli", default=os.path.join(ROOT, "build", "rubdyn"))
@@ -89,9 +101,15 @@ def main():
                         f"{np.max(np.abs(mus)):.6f}", f"{np.max(dist):.1e}",
                         f"{np.max(errs):.1e}", f"{ratio:.2f}", d["stability"], expected,
                         str(d["runs"]), f"{d['wall_seconds']:.3f}"])
-                    if d["stability"] != expected:
-                        print(f"MISMATCH {label} {which} rtol {rtol}: {d['stability']} != "
-                              f"{expected}", file=sys.stderr)
+                    # the same orbit, its monodromy from the flow's sensitivities
+                    sd, _ = orbit(a.cli, case, sets, out + "_sens", rtol, atol, SENS)
+                    sdist, serr, sratio = compare(sd, ref)
+                    worst_ratio = max(worst_ratio, sratio)
+                    rows[-1] += [f"{sdist:.1e}", f"{serr:.1e}", f"{sratio:.2f}",
+                                 sd["stability"]]
+                    if d["stability"] != expected or sd["stability"] != expected:
+                        print(f"MISMATCH {label} {which} rtol {rtol}: {d['stability']}, "
+                              f"{sd['stability']} != {expected}", file=sys.stderr)
         # Black's rolling orbits (closed-forms.md 3.3, both branches): autonomous orbits from a
         # period guess 1 % off; the reference: exp(lambda T) of reference_sim's stick-phase
         # eigenvalues, and the trivial multiplier 1
@@ -118,13 +136,19 @@ def main():
                 ratio = float(np.max(dist / errs))
                 worst_ratio = max(worst_ratio, ratio)
                 triv = d["trivial_multiplier"]
+                sd, _ = orbit(a.cli, case_b, rr.initial_sets(keys), out + "_sens", rtol, atol,
+                              ["--period", repr(1.01 * Tw)] + SENS)
+                sdist, serr, sratio = compare(sd, ref)
+                worst_ratio = max(worst_ratio, sratio)
                 black.append([which, f"{w:.3f}", f"{rtol:g}", d["outcome"],
                               str(len(d["newton"]) - 1), f"{d['period'] / Tw - 1:.1e}",
                               f"{abs(mus[triv['index']] - 1):.1e}",
                               f"{errs[triv['index']]:.1e}", str(triv["is_one"]).lower(),
                               f"{np.max(dist):.1e}", f"{ratio:.2f}", d["stability"],
-                              "stable" if max(ev.real) < 0 else "unstable", str(d["runs"])])
-                if d["stability"] != black[-1][-2] or not triv["is_one"]:
+                              "stable" if max(ev.real) < 0 else "unstable", str(d["runs"]),
+                              f"{sdist:.1e}", f"{serr:.1e}", f"{sratio:.2f}", sd["stability"]])
+                if (d["stability"] != black[-1][12] or sd["stability"] != black[-1][12]
+                        or not triv["is_one"]):
                     print(f"MISMATCH black {which} rtol {rtol}", file=sys.stderr)
                     worst_ratio = max(worst_ratio, 2.0)
         # a start off the orbit: cases/full-rub.toml (the sprung ring's larger root) with x_r
@@ -135,7 +159,9 @@ def main():
     head = ["ring", "root", "N [N]", "rtol", "outcome", "Newton it.", "residual",
             "residual floor",
             "abs(x_r - closed form) / g0", "max abs(mu)", "max abs(mu - exp(lambda T))",
-            "max error bound", "distance / bound", "verdict", "expected", "runs", "wall [s]"]
+            "max error bound", "distance / bound", "verdict", "expected", "runs", "wall [s]",
+            "sens.: max abs(mu - exp(lambda T))", "sens.: max error bound",
+            "sens.: distance / bound", "sens.: verdict"]
     lines = [
         "# rubdyn orbit against the closed form of the full annular rub",
         "",
@@ -146,7 +172,9 @@ def main():
         "are exp(lambda T) of the eigenvalues of the orbit in the rotating frame from the "
         "independent simulation `validation/analytic/reference_sim.py` (`orbit_eigenvalues`); "
         "each rubdyn multiplier is matched to the nearest. `distance / bound` <= 1 means the "
-        "reported error bound covers the true error. Expected verdict: stable iff every "
+        "reported error bound covers the true error. The columns `sens.` are the same orbit "
+        "with `--monodromy sensitivities` (the variational equations and saltation matrices, "
+        "docs/orbits.md section 7) instead of finite differences. Expected verdict: stable iff every "
         "eigenvalue has a negative real part. Machine: " + machine() + ".",
         "",
         "| " + " | ".join(head) + " |",
@@ -158,7 +186,9 @@ def main():
               "computed map's noise (the default tol, 1e-8, must lie above it).", ""]
     bhead = ["branch", "w [rad/s]", "rtol", "outcome", "Newton it.", "period / (2 pi / abs(w)) - 1",
              "abs(trivial - 1)", "its error bound", "trivial is 1", "max abs(mu - exp(lambda T))",
-             "distance / bound", "verdict", "expected", "runs"]
+             "distance / bound", "verdict", "expected", "runs",
+             "sens.: max abs(mu - exp(lambda T))", "sens.: max error bound",
+             "sens.: distance / bound", "sens.: verdict"]
     lines += [
         "Black's rolling orbits (docs/closed-forms.md 3.3, the set BLACK_ROLL, both branches of "
         "the bistable sprung stator under a torque of 40 N m) as autonomous orbits: "
@@ -181,7 +211,7 @@ def main():
     with open(a.out, "w") as f:
         f.write("\n".join(lines))
     print("\n".join(lines))
-    if worst_ratio > 1 or any(r[13] != r[14] for r in rows):
+    if worst_ratio > 1 or any(r[13] != r[14] or r[20] != r[14] for r in rows):
         raise SystemExit(1)
 
 

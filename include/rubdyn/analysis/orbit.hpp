@@ -236,6 +236,31 @@ class FiniteDifferenceMonodromy final : public MonodromyProvider {
   std::vector<double> steps_;
 };
 
+/// The monodromy from the flow's sensitivities (docs/orbits.md section 7): the variational
+/// equations V' = f_x(t, x) V of every phase, integrated along the orbit's run in the full state
+/// x = (q, v) with the phase's constrained vector field f (the acceleration-level contact problem
+/// of its modes: a tangent V stays tangent to the constraints), multiplied at every event by the
+/// saltation matrix S = R_x P + f+ g_x^T / g', P = I - f- g_x^T / g': g the witness that fired
+/// (d_N at an onset, F_N at a lift-off, v_t at a stick or reversal, the cone margin at a slip),
+/// g' its rate along the flow before the event, f- and f+ the vector fields on both sides, R_x
+/// the reset's Jacobian along the event surface: the engine's own impact decision
+/// (ContactDecider::arrive: impulses, Zeno truncation, cascade collapse) by central differences
+/// of that algebraic map at impacts, the identity at every other switch. f_x V by central
+/// differences of the vector field along each column of V (step kVariationalStep of the
+/// column's scaled size: truncation and round-off both ~1e-11 relative). The augmented system
+/// (x, V) is integrated by CVODE-BDF under the map's tolerances (V's rows weighted as x's), its
+/// Newton systems block-diagonal with one factorisation of I - gamma f_x; done twice, at rtol
+/// and at rtol / 100 (rtol x 100 below 1e-11), M the finer, its error their difference (2-norm:
+/// the coarser's error, above the finer's). Not smooth, so a failure naming the event: an event
+/// whose witness crosses with zero rate (grazing), two triggering events at one instant, an
+/// impact whose decision changes within the difference step, a grazing or Painleve record.
+class SensitivityMonodromy final : public MonodromyProvider {
+ public:
+  std::string_view name() const override { return "sensitivities"; }
+  Monodromy compute(const PeriodMap& map, double T, const SectionChart& chart, VecIn xi,
+                    const FlowRun& at) const override;
+};
+
 /// One Floquet multiplier with its error bound and its direction.
 struct FloquetMultiplier {
   std::complex<double> value;
