@@ -26,6 +26,15 @@ constexpr int kLocateIterations = 8;
 // A multiplier is real when its imaginary part is below this (eigenvalues of a real matrix
 // come in exact conjugate pairs, and Eigen returns real ones with a zero imaginary part).
 constexpr double kRealImag = 0.0;
+// A forced orbit's section is a time t0, which the continuation keeps while the parameter moves;
+// an event of the orbit that comes this close to it (a fraction of the period, either side)
+// would cross it within a few steps, which changes the event signature (and the map's
+// smoothness) for a reason that has nothing to do with the orbit, and brings the finite
+// differences' perturbations near it: the section is then moved to the middle of the longest
+// stretch of free flight between events (move_section). 10 %: on the paper's rotor's branch
+// the events move by up to 0.04 T from one point to the next, and a lift-off 0.05 T before the
+// section already made the monodromy's error 4 (an undecided point).
+constexpr double kSectionClearance = 0.1;
 
 /// The orbit at one point: its chart, monodromy, G_lambda, tangent and books.
 struct PointData {
@@ -33,6 +42,9 @@ struct PointData {
   std::unique_ptr<SectionChart> chart;
   Mat J;  // d x (d + 1): [Phi - I, G_lambda s_lambda]
   Vec t;  // unit tangent (d + 1), in this chart's coordinates
+  /// The orbit's events after the section, as offsets from it in (0, T) (the decision at the
+  /// section is its start, not an event), each with whether every contact is free after it
+  std::vector<std::pair<double, bool>> event_offsets;
 };
 
 struct Eval {
@@ -62,14 +74,15 @@ Eval evaluate(const ModelFamily& family, const SectionChart& chart, VecIn xi, do
   }
   // an iterate beyond a grazing of the free orbits it continues lies inside the stator: the
   // switching surface is crossed, as when an iterate's events change
-  if (const auto pen = penetrates_open_contact(*pm.model, chart, pm.t0, x)) {
+  const double t0 = chart.time();  // the section's time: the point's, not the family's
+  if (const auto pen = penetrates_open_contact(*pm.model, chart, t0, x)) {
     e.penetrates = true;
     e.signature =
         fmt::format("inside contact {}'s stator, d_N = {:.3g} m", pen->contact + 1, pen->d_N);
     e.why = fmt::format("the state at {:.10g} lies {}", lambda, e.signature);
     return e;
   }
-  const PeriodMap map(*pm.model, pm.t0, pm.options);
+  const PeriodMap map(*pm.model, t0, pm.options);
   e.run = map.run(x, pm.period);
   ++runs;
   if (!e.run.complete()) {
@@ -77,7 +90,7 @@ Eval evaluate(const ModelFamily& family, const SectionChart& chart, VecIn xi, do
                         to_string(e.run.summary.termination), e.run.summary.message);
     return e;
   }
-  e.signature = event_signature(e.run, pm.t0);
+  e.signature = event_signature(e.run, t0);
   e.G = chart.coords(stacked_state(e.run.samples.back())) -
         chart.coords(stacked_state(e.run.samples.front()));
   e.ok = true;
@@ -113,11 +126,14 @@ double smallest_gap(const std::vector<Sample>& s) {
   return y1 - (y2 - y0) * (y2 - y0) / (8.0 * curv);
 }
 
-/// Everything about the orbit through x at lambda (x on its section's constraints).
+/// Everything about the orbit through x at lambda (x on its section's constraints), its section
+/// at the time t0 (NaN: the family's).
 bool make_point(const ModelFamily& family, double lambda, VecIn x, const ContinuationOptions& opt,
-                PointData& out, std::string& why, long& runs, const std::string* expect = nullptr) {
+                PointData& out, std::string& why, long& runs, const std::string* expect = nullptr,
+                double t0 = std::numeric_limits<double>::quiet_NaN()) {
   ParameterModel pm = family(lambda);
-  const PeriodMap map(*pm.model, pm.t0, pm.options);
+  if (std::isnan(t0)) t0 = pm.t0;
+  const PeriodMap map(*pm.model, t0, pm.options);
   const FlowRun run = map.run(x, pm.period);
   ++runs;
   if (!run.complete()) {
@@ -126,19 +142,45 @@ bool make_point(const ModelFamily& family, double lambda, VecIn x, const Continu
     return false;
   }
   const Vec xs = stacked_state(run.samples.front());
-  if (expect && event_signature(run, pm.t0) != *expect) {
+  out.p.t0 = t0;
+  out.event_offsets.clear();
+  for (const EventRecord& ev : run.events) {
+    if (!(ev.t > t0 && ev.t < t0 + pm.period)) continue;
+    if (!out.event_offsets.empty() && out.event_offsets.back().first == ev.t - t0) continue;
+    // the phases after the event: the last sample at its time
+    bool free = true;
+    for (auto it = run.samples.rbegin(); it != run.samples.rend(); ++it)
+      if (it->t == ev.t) {
+        for (const ContactSample& c : it->contacts) free = free && c.phase == Phase::Free;
+        break;
+      }
+    out.event_offsets.push_back({ev.t - t0, free});
+  }
+  {
+    bool free = true;  // at the section: the phases the run started in
+    for (const Phase ph : start_phases(run)) free = free && ph == Phase::Free;
+    double t_prev = 0.0;
+    out.p.free_time = 0.0;
+    for (const auto& [o, f] : out.event_offsets) {
+      if (free) out.p.free_time += o - t_prev;
+      t_prev = o;
+      free = f;
+    }
+    if (free) out.p.free_time += pm.period - t_prev;
+  }
+  if (expect && event_signature(run, t0) != *expect) {
     // the orbit's events changed (a grazing, a lift-off at the section): no chart of the
     // previous phases, no smooth continuation; the point is reported as it is
     out.p.lambda = lambda;
     out.p.period = pm.period;
     out.p.x0 = xs;
-    out.p.signature = event_signature(run, pm.t0);
+    out.p.signature = event_signature(run, t0);
     out.p.floquet.reason = "not computed: the orbit's events changed";
     out.chart.reset();
     return true;
   }
   const Vec D = state_scale(*pm.model, pm.omega);
-  out.chart = std::make_unique<SectionChart>(*pm.model, pm.t0, xs, start_phases(run), D);
+  out.chart = std::make_unique<SectionChart>(*pm.model, t0, xs, start_phases(run), D);
   const SectionChart& chart = *out.chart;
   const int d = chart.dim();
   const Vec zero = Vec::Zero(d);
@@ -177,7 +219,7 @@ bool make_point(const ModelFamily& family, double lambda, VecIn x, const Continu
   p.residual = chart.scaled_distance(xs, stacked_state(run.samples.back()));
   p.monodromy = std::move(m);
   p.floquet = std::move(fl);
-  p.signature = event_signature(run, pm.t0);
+  p.signature = event_signature(run, t0);
   const int samples = std::max(8, opt.orbit.samples);
   const FlowRun sampled = map.run(xs, pm.period, pm.period / samples);
   ++runs;
@@ -205,11 +247,24 @@ double nearest_real(const FloquetAnalysis& f, double target) {
   return best;
 }
 
-int complex_outside(const FloquetAnalysis& f) {
-  int n = 0;
+/// The multipliers outside the unit circle: all, and the complex ones.
+std::pair<int, int> outside(const FloquetAnalysis& f) {
+  int all = 0, complex = 0;
   for (const auto& m : f.multipliers)
-    if (std::abs(m.value.imag()) > kRealImag && std::abs(m.value) > 1.0) ++n;
-  return n;
+    if (std::abs(m.value) > 1.0) {
+      ++all;
+      if (std::abs(m.value.imag()) > kRealImag) ++complex;
+    }
+  return {all, complex};
+}
+
+/// A Neimark-Sacker point between two points: the multipliers outside the circle change in
+/// number, and by as many complex ones (a complex pair outside that meets on the real axis and
+/// splits into two real multipliers outside changes only the complex count: no crossing).
+bool neimark_sacker_between(const FloquetAnalysis& a, const FloquetAnalysis& b) {
+  const auto [na, ca] = outside(a);
+  const auto [nb, cb] = outside(b);
+  return na != nb && nb - na == cb - ca;
 }
 
 /// The corrector from point `from` at arclength s along its tangent: u with G(u) = 0 and
@@ -282,7 +337,9 @@ bool correct(const ModelFamily& family, const PointData& from, double s,
 /// Where a smooth branch meets a switching surface, extrapolated from its last smooth points
 /// `pts` (up to three): a lift-off where its orbits are in contact throughout their period (the
 /// contact force's minimum over the period, F_N_min, falls towards zero), a grazing where they are
-/// free throughout (the gap's minimum over the period, d_N_min, falls towards zero). The secant of
+/// free throughout (the gap's minimum over the period, d_N_min, falls towards zero), the
+/// vanishing of the free flight where they are partly free (the square of the time free per
+/// period falls towards zero: the lift-off meets the impact, full rub beyond). The secant of
 /// that minimum over lambda through the last two points, and the parabola through the last three;
 /// the special `s` that ends the branch takes the parabola's root nearest the last point (the
 /// secant's with two points) as its value, the two estimates' difference as its spread, and says
@@ -291,18 +348,24 @@ bool correct(const ModelFamily& family, const PointData& from, double s,
 void locate_end(const std::vector<PointData>& pts, BranchSpecial& s) {
   const std::size_t n = std::min<std::size_t>(pts.size(), 3);
   if (n < 2) return;
-  // which quantity: every point in contact at every sample, or every point free at every one
-  bool contact = true, free = true;
+  // which quantity: every point in contact at every sample, or every point free at every one,
+  // or every point partly free
+  bool contact = true, free = true, flight = true;
   for (std::size_t k = pts.size() - n; k < pts.size(); ++k) {
     const BranchPoint& p = pts[k].p;
     contact = contact && p.F_N_min > 0.0 && std::isfinite(p.F_N_min);
     free = free && p.F_N_max == 0.0 && p.d_N_min > 0.0 && std::isfinite(p.d_N_min);
+    flight = flight && pts[k].p.free_time > 0.0 && pts[k].p.free_time < p.period;
   }
-  if (!contact && !free) return;
+  if (!contact && !free && !flight) return;
   std::vector<double> l, F;
   for (std::size_t k = pts.size() - n; k < pts.size(); ++k) {
     l.push_back(pts[k].p.lambda);
-    F.push_back(contact ? pts[k].p.F_N_min : pts[k].p.d_N_min);
+    // a flight that shrinks to nothing between a lift-off and an impact: its gap is ~ a t (tau
+    // - t) / 2, and tau^2, not tau, is what falls linearly to zero where the contact force's
+    // minimum along the slide touches 0 (tau ~ sqrt(lambda - lambda_c))
+    F.push_back(contact ? pts[k].p.F_N_min
+                        : (free ? pts[k].p.d_N_min : pts[k].p.free_time * pts[k].p.free_time));
   }
   const std::size_t e = n - 1;
   if (!(F[e] < F[e - 1]) || l[e] == l[e - 1]) return;
@@ -328,11 +391,102 @@ void locate_end(const std::vector<PointData>& pts, BranchSpecial& s) {
   }
   s.lambda = lambda;
   s.spread = spread;
+  if (flight && !contact && !free) {
+    s.how += fmt::format(
+        "; the square of the free flight's duration per period, {:.6g} s^2 at the last point, "
+        "extrapolated to zero from the last {} smooth points: the flight vanishes (its lift-off "
+        "meets its impact) at {:.10g} (secant {:.10g}, estimates {:.2g} apart)",
+        F[e], n, lambda, secant, spread);
+    return;
+  }
   s.how += fmt::format(
       "; the {}'s minimum over the period, {:.6g} {} at the last point, extrapolated to zero "
       "from the last {} smooth points: {} at {:.10g} (secant {:.10g}, estimates {:.2g} apart)",
       contact ? "contact force" : "gap", F[e], contact ? "N" : "m", n,
       contact ? "lift-off" : "grazing", lambda, secant, spread);
+}
+
+/// Where to move the section of an orbit with an event within kSectionClearance of a period of
+/// it (`off`: the events' offsets from the section, in (0, T), increasing, each with whether the
+/// orbit is free after it): the middle of the longest stretch of the period between two events
+/// in free flight (when its middle is kSectionClearance from them), else of the longest stretch,
+/// as an offset in (0, T) from the section; NaN when no event is that near, or when the move
+/// would not double the events' distance from the section. A section in free flight has the
+/// identity as its chart; one in a contact phase charts the constraint manifold (a circle in the
+/// relative position) linearly, which the corrector's steps along the branch can carry beyond where
+/// it is one-to-one.
+double new_section_offset(const std::vector<std::pair<double, bool>>& off, double T) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (off.empty()) return nan;
+  const double clearance = std::min(off.front().first, T - off.back().first);
+  if (clearance >= kSectionClearance * T) return nan;
+  // the longest stretch in free flight when its middle clears the events by kSectionClearance,
+  // else the longest
+  double best_len = -1.0, best_mid = 0.0;
+  for (const bool free_only : {true, false}) {
+    for (std::size_t k = 0; k < off.size(); ++k) {
+      // the stretch after event k, to the next (across the section after the last)
+      const double a = off[k].first;
+      const double b = k + 1 < off.size() ? off[k + 1].first : off.front().first + T;
+      if (free_only && !off[k].second) continue;
+      if (b - a > best_len) best_len = b - a, best_mid = a + 0.5 * (b - a);
+    }
+    if (best_len >= 2.0 * kSectionClearance * T) break;
+  }
+  // moved only where the events end up clearly farther (a section whose events crowd every
+  // stretch stays where it is)
+  if (!(0.5 * best_len > 2.0 * clearance)) return nan;
+  return best_mid < T ? best_mid : best_mid - T;
+}
+
+/// Moves the section of the branch's last point `pts.back()` away from its orbit's events when
+/// one comes within kSectionClearance of a period of it (new_section_offset): the same orbit,
+/// its state at the new section from a run of the point's, the point made anew there (chart,
+/// monodromy, tangent), the tangent oriented along the secant from the previous point's state at
+/// the new section (or as the old tangent's parameter component, at the first point). Returns
+/// the new section's time (NaN: not moved); false on failure (why).
+bool move_section(const ModelFamily& family, const ContinuationOptions& opt,
+                  std::vector<PointData>& pts, long& runs, double& moved_to, std::string& why) {
+  moved_to = std::numeric_limits<double>::quiet_NaN();
+  PointData& cur = pts.back();
+  const double off = new_section_offset(cur.event_offsets, cur.p.period);
+  if (std::isnan(off)) return true;
+  const double t_new = cur.p.t0 + off;
+  const auto state_at = [&](const BranchPoint& p, Vec& x) {
+    ParameterModel pm = family(p.lambda);
+    const PeriodMap map(*pm.model, p.t0, pm.options);
+    const FlowRun r = map.run(p.x0, t_new - p.t0);
+    ++runs;
+    if (!r.complete()) {
+      why = fmt::format("the run moving the section to t = {:.10g} at {:.10g} ended early: {}",
+                        t_new, p.lambda, r.summary.message);
+      return false;
+    }
+    x = stacked_state(r.samples.back());
+    return true;
+  };
+  Vec x;
+  if (!state_at(cur.p, x)) return false;
+  PointData nb;
+  if (!make_point(family, cur.p.lambda, x, opt, nb, why, runs, nullptr, t_new)) return false;
+  const int d = nb.chart->dim();
+  Vec xp;
+  if (pts.size() >= 2 && state_at(pts[pts.size() - 2].p, xp)) {
+    Vec sec(d + 1);
+    sec.head(d) = -nb.chart->coords(xp);
+    sec(d) = (cur.p.lambda - pts[pts.size() - 2].p.lambda) / opt.lambda_scale;
+    if (nb.t.dot(sec) < 0) nb.t = -nb.t;
+  } else if (nb.t(d) * cur.p.tangent_lambda < 0) {
+    nb.t = -nb.t;
+  }
+  why.clear();
+  nb.p.arclength = cur.p.arclength;
+  nb.p.corrector_iterations = cur.p.corrector_iterations;
+  nb.p.tangent_lambda = nb.t(d);
+  nb.p.runs = cur.p.runs;
+  cur = std::move(nb);
+  moved_to = t_new;
+  return true;
 }
 
 }  // namespace
@@ -383,6 +537,13 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
   double changed_lambda = 0.0;
   std::string changed_signature;
   while (static_cast<int>(b.points.size()) < opt.max_points) {
+    {
+      double moved_to;
+      std::string why;
+      if (!move_section(family, opt, pts, runs, moved_to, why)) return done("step_failed", why);
+      if (!std::isnan(moved_to))
+        b.section_moves.push_back({static_cast<int>(b.points.size()) - 1, moved_to});
+    }
     const PointData& cur = pts.back();
     const long runs_before = runs;
     Corrected c;
@@ -427,7 +588,7 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
                                               lambda, opt.lambda_min, opt.lambda_max));
     PointData next;
     if (!make_point(family, lambda, stacked_state(c.eval.run.samples.front()), opt, next, why, runs,
-                    &cur.p.signature))
+                    &cur.p.signature, cur.p.t0))
       return done("step_failed", why);
     if (!next.chart) {  // the events changed: the branch of smooth orbits ends here
       BranchSpecial s;
@@ -527,7 +688,7 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
                           n0, n1);
       b.specials.push_back(s);
     }
-    if (complex_outside(a.floquet) != complex_outside(p.floquet)) {
+    if (neimark_sacker_between(a.floquet, p.floquet)) {
       BranchSpecial s;
       s.kind = "neimark_sacker";
       s.after = i;

@@ -358,10 +358,11 @@ std::string branch_csv(const CaseBranch& b) {
   for (const auto& p : b.branch.points) nm = std::max(nm, p.floquet.multipliers.size());
   std::string s = "point,";
   s += b.key;
-  s += ",arclength,period,amplitude,F_N_max,F_N_min,d_N_min,residual,stability,mu_max_abs";
+  s += ",arclength,period,amplitude,F_N_max,F_N_min,d_N_min,free_time,residual,stability,"
+       "mu_max_abs";
   for (std::size_t j = 1; j <= nm; ++j)
     s += fmt::format(",mu{0}_re,mu{0}_im,mu{0}_abs,mu{0}_error", j);
-  s += ",corrector_iterations,runs";
+  s += ",corrector_iterations,runs,t0";  // t0: the section's time, where the state is
   for (const auto& n : b.state_names) {
     s += ',';
     s += n;
@@ -371,8 +372,8 @@ std::string branch_csv(const CaseBranch& b) {
   for (std::size_t i = 0; i < b.branch.points.size(); ++i) {
     const BranchPoint& p = b.branch.points[i];
     const auto& F = p.floquet.multipliers;
-    fmt::format_to(out, "{},{},{},{},{},{},{},{},{},{},{}", i, p.lambda, p.arclength, p.period,
-                   p.amplitude, p.F_N_max, p.F_N_min, p.d_N_min, p.residual,
+    fmt::format_to(out, "{},{},{},{},{},{},{},{},{},{},{},{}", i, p.lambda, p.arclength, p.period,
+                   p.amplitude, p.F_N_max, p.F_N_min, p.d_N_min, p.free_time, p.residual,
                    to_string(p.floquet.stability), F.empty() ? 0.0 : std::abs(F.front().value));
     for (std::size_t j = 0; j < nm; ++j) {
       if (j < F.size())
@@ -381,7 +382,7 @@ std::string branch_csv(const CaseBranch& b) {
       else
         s += ",,,,";
     }
-    fmt::format_to(out, ",{},{}", p.corrector_iterations, p.runs);
+    fmt::format_to(out, ",{},{},{}", p.corrector_iterations, p.runs, p.t0);
     for (Eigen::Index j = 0; j < p.x0.size(); ++j) fmt::format_to(out, ",{}", p.x0(j));
     s += ',';
     s += quoted_string(p.signature);
@@ -409,6 +410,10 @@ std::string branch_json(const CaseBranch& b) {
                                                                    : std::string("null"),
                    str(x.how));
   }
+  fmt::format_to(out, "\n  ],\n  \"section_moves\": [");
+  for (std::size_t i = 0; i < r.section_moves.size(); ++i)
+    fmt::format_to(out, "{}\n    {{\"after\": {}, \"t0\": {}}}", i ? "," : "",
+                   r.section_moves[i].after, num(r.section_moves[i].t0));
   fmt::format_to(out, "\n  ],\n  \"runs\": {},\n  \"wall_seconds\": {}\n}}\n", r.runs,
                  num(r.wall_seconds));
   return s;

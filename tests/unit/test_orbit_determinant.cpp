@@ -38,12 +38,16 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <string>
 #include <vector>
 
+#include "rubdyn/analysis/continuation.hpp"
 #include "rubdyn/analysis/orbit.hpp"
 #include "rubdyn/analysis/orbit_case.hpp"
 #include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/model_registry.hpp"
+#include "rubdyn/io/solver_options.hpp"
 
 using namespace rubdyn;
 
@@ -201,6 +205,74 @@ TEST_CASE(
       INFO("multiplier " << f.value << " +- " << f.error << ", finite differences' nearest at "
                          << best << " +- " << err);
       CHECK(best <= f.error + err);
+    }
+  }
+}
+
+// The continuation's section is a time t0, kept while the parameter moves; an event of the orbit
+// near it would cross it within a few steps. Started with the section 3 % of a period before the
+// impact, the branch (in the spin speed) moves it at once to the middle of the flight, and every
+// point after it is the same kind of orbit with its events well away from its section.
+TEST_CASE("orbit: a continuation moves its section away from the orbit's events", "[orbit]") {
+  Scene p;
+  p.rtol = 1e-10;
+  p.atol = 1e-13;
+  const std::string text = case_text(p);
+  CaseOrbitOptions o;
+  o.settle = 40;  // as above
+  o.orbit.samples = 1;
+  const CaseOrbit co = find_case_orbit(parse_case(text, "partial-rub.toml"), o);
+  const OrbitResult& res = co.result;
+  REQUIRE(res.converged());
+  REQUIRE(res.events.size() == 1);  // one impact a period, free flight between
+  const double T = res.period;
+  const double t_impact = res.events[0].t;  // from t0
+  // the section 0.03 T before the impact: the orbit's state there
+  const double lead = t_impact > 0.03 * T ? t_impact - 0.03 * T : t_impact + 0.97 * T;
+  const PeriodMap map0(*co.model, res.t0, event_driven_options(parse_case(text, "x.toml")));
+  const FlowRun to_s = map0.run(res.x0, lead);
+  REQUIRE(to_s.complete());
+  const double t_s = res.t0 + lead;
+  const ModelFamily family = [&text, t_s](double omega) {
+    const CaseSpec spec = parse_case(text, "partial-rub.toml", {"initial.omega0=" + fmt_g(omega)});
+    ParameterModel pm;
+    pm.model = build_model(spec);
+    pm.t0 = t_s;
+    pm.omega = omega;
+    pm.period = 2 * std::numbers::pi / omega;
+    pm.options = event_driven_options(spec);
+    return pm;
+  };
+  ContinuationOptions opt;
+  opt.lambda_scale = 2.5;  // 1 % of the speed
+  opt.ds = 0.2;
+  opt.ds_max = 0.5;
+  opt.max_points = 4;
+  const Branch b = continue_forced_orbit(family, p.Omega, stacked_state(to_s.samples.back()), opt);
+  INFO(b.outcome << ": " << b.message);
+  REQUIRE(b.points.size() == 4);
+  REQUIRE(!b.section_moves.empty());
+  CHECK(b.section_moves.front().after == 0);  // before the first step
+  CHECK(b.points[0].t0 == t_s);
+  for (std::size_t i = 1; i < b.points.size(); ++i) {
+    const BranchPoint& q = b.points[i];
+    INFO("point " << i << " at " << q.lambda << ", section t0 = " << q.t0);
+    CHECK(q.lambda > b.points[i - 1].lambda);  // the tangent kept its orientation
+    CHECK(q.t0 == b.section_moves.back().t0);
+    CHECK(q.signature == "free | impact | free");
+    // its orbit from its section: periodic (the corrector's tolerance, scaled) and the impact
+    // at least 0.1 T away from both ends: the middle of a flight that fills the period but for
+    // the impact instant, 0.5 T, moved by the few steps since
+    const ParameterModel pm = family(q.lambda);
+    const PeriodMap m(*pm.model, q.t0, pm.options);
+    const FlowRun r = m.run(q.x0, pm.period);
+    REQUIRE(r.complete());
+    const Vec D = state_scale(*pm.model, pm.omega);
+    CHECK(((stacked_state(r.samples.back()) - q.x0).array() / D.array()).abs().maxCoeff() <=
+          opt.orbit.tol);
+    for (const EventRecord& ev : r.events) {
+      CHECK(ev.t - q.t0 >= 0.1 * pm.period);
+      CHECK(ev.t - q.t0 <= 0.9 * pm.period);
     }
   }
 }

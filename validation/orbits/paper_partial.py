@@ -103,24 +103,34 @@ def match(a, b):
     return out
 
 
-def last_point_events(cli, out, folder, t0):
-    """The events over 1.02 periods of the branch's last smooth point (its state in branch.csv),
-    as (fraction of the period after the section, kind): where the branch ends, which event
-    approaches the section."""
+NAMES = ["x_b", "y_b", "x_r", "y_r", "x_s", "y_s", "vx_b", "vy_b", "vx_r", "vy_r", "vx_s", "vy_s"]
+
+
+def last_smooth_points(folder, j):
+    """branch.csv's last three smooth points (before the events change that ends the branch)."""
     with open(os.path.join(folder, "branch.csv")) as f:
-        row = list(csv.DictReader(f))[-1]
-    om = float(row["initial.omega0"])
-    T = 2 * math.pi / om
-    names = ["x_b", "y_b", "x_r", "y_r", "x_s", "y_s", "vx_b", "vy_b", "vx_r", "vy_r", "vx_s",
-             "vy_s"]
-    sets = [f"initial.{n}={float(row[n])!r}" for n in names]
-    sets += [f"initial.omega0={om!r}", f"initial.theta={om * t0!r}", f"run.t_end={1.02 * T!r}"]
-    cmd = [cli, "run", CASE, "--out", out, "--quiet"]
+        rows = list(csv.DictReader(f))
+    end = len(rows)
+    for s in j["specials"]:
+        if s["kind"] == "events_change" and s["between"][1] is not None:
+            end = s["between"][1]
+    return rows[max(0, end - 3):end]
+
+
+def orbit_at_point(cli, out, row, t_s, theta_s):
+    """`rubdyn orbit --monodromy sensitivities` from a branch point's state at its own section
+    (run.t_start = its t0; theta there as the branch's family has it: the --from sample's theta_s
+    at t_s, then omega), i.e. the same section: Newton should have nothing to do."""
+    om, t0 = float(row["initial.omega0"]), float(row["t0"])
+    sets = [f"initial.{n}={float(row[n])!r}" for n in NAMES]
+    sets += [f"initial.omega0={om!r}", f"run.t_start={t0!r}", f"run.t_end={t0 + 1.0!r}",
+             f"initial.theta={theta_s + om * (t0 - t_s)!r}"]
+    cmd = [cli, "orbit", CASE, "--out", out, "--monodromy", "sensitivities"]
     for x in sets:
         cmd += ["--set", x]
     run(cmd)
-    with open(os.path.join(out, "events.csv")) as f:
-        return om, [(float(e["t"]) / T, e["kind"]) for e in csv.DictReader(f)]
+    with open(os.path.join(out, "orbit.json")) as f:
+        return json.load(f)
 
 
 def branch(cli, out, frm, down):
@@ -201,12 +211,16 @@ def main():
         # 3. the continuation
         br = []
         if not a.no_branch:
+            with open(os.path.join(tr, "timeseries.csv")) as f:
+                last_row = list(csv.DictReader(f))[-1]
+            t_s, theta_s = float(last_row["t"]), float(last_row["theta"])
             for down in (False, True):
                 folder = os.path.join(tmp, "b" + ("down" if down else "up"))
                 j, w = branch(a.cli, folder, tr, down)
-                last = last_point_events(a.cli, os.path.join(tmp, "last" + str(down)), folder,
-                                         o10["t0"])
-                br.append((down, j, w, last))
+                rows = last_smooth_points(folder, j)
+                chk = orbit_at_point(a.cli, os.path.join(tmp, "chk" + str(down)), rows[-1], t_s,
+                                     theta_s)
+                br.append((down, j, w, rows, chk))
     lines = [
         "# The paper's rotor in partial rub: its periodic orbit and Floquet multipliers",
         "",
@@ -267,7 +281,7 @@ def main():
         + " |",
         "",
     ]
-    for down, j, w, (om_last, evs) in br:
+    for down, j, w, rows, chk in br:
         lines.append(f"**Continuation {'down' if down else 'up'}** (`rubdyn branch CASE --from RUN "
                      f"--vary initial.omega0 --points 100{' --down' if down else ''}`): "
                      f"{j['points']} points, outcome `{j['outcome']}`, {j['runs']} runs, {w:.1f} s: "
@@ -276,9 +290,20 @@ def main():
             at = (f"between points {s['between'][0]} and {s['between'][1]}"
                   if s["between"][1] is not None else f"after point {s['between'][0]}")
             lines.append(f"- {s['kind']} at {s['value']:.6f} rad/s ({at}): {s['how']}")
-        lines.append(f"- the last smooth point, {om_last:.7f} rad/s, run over 1.02 periods from its "
-                     "section state: " + ", ".join(f"{k} at {x:.5f} T" for x, k in evs)
-                     + " after the section (an event at 0 or 1 T is at the section itself)")
+        moves = j.get("section_moves", [])
+        lines.append(f"- the section moved {len(moves)} time(s) away from the orbit's events "
+                     "(docs/orbits.md section 10): after points "
+                     + ", ".join(str(m["after"]) for m in moves))
+        lines.append("- the last smooth points: " + "; ".join(
+            f"{float(r['initial.omega0']):.4f} rad/s: free {float(r['free_time']) / float(r['period']):.3f} T, "
+            f"max abs(mu) {float(r['mu_max_abs']):.6f} +- {float(r['mu1_error']):.1e} ({r['stability']})"
+            for r in rows))
+        m0 = chk["multipliers"][0] if chk["multipliers"] else None
+        lines.append(
+            f"- `rubdyn orbit --monodromy sensitivities` from the last smooth point's state at its "
+            f"section: {chk['outcome']} in {len(chk['newton']) - 1} Newton iteration(s), "
+            + (f"max abs(mu) {m0['abs']:.6f} +- {m0['error']:.1e} ({chk['stability']}), events "
+               f"{chk['sequence']}" if m0 else chk["message"]))
         lines.append("")
     if fails:
         lines += ["**FAILED**: " + "; ".join(fails), ""]

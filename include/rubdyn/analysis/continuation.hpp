@@ -68,7 +68,10 @@ struct BranchPoint {
   /// contact 1's smallest gap over the period [m]: the smallest sample's, refined by the parabola
   /// through it and its two neighbours where it is a strict local minimum
   double d_N_min = 0.0;
-  long runs = 0;  ///< runs of the return map for this point
+  double free_time = 0.0;  ///< the time of the period in which every contact is free [s]
+  long runs = 0;           ///< runs of the return map for this point
+  double t0 =
+      0.0;  ///< the section's time (moved away from the orbit's events: Branch::section_moves)
 };
 
 /// A special point between two points of the branch.
@@ -90,6 +93,13 @@ struct Branch {
   std::string message;
   long runs = 0;
   double wall_seconds = 0.0;
+  /// Where the section was moved, because an event of the orbit came within 10 % of a period of
+  /// it: after point `after` (the same orbit, from there on at the section time t0).
+  struct SectionMove {
+    int after = 0;
+    double t0 = 0.0;
+  };
+  std::vector<SectionMove> section_moves;
 };
 
 /// Follows the forced orbit from the guess x_guess at lambda0 (Newton there first).
