@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <Eigen/SVD>
 #include <algorithm>
@@ -126,6 +127,27 @@ double smallest_gap(const std::vector<Sample>& s) {
   return y1 - (y2 - y0) * (y2 - y0) / (8.0 * curv);
 }
 
+/// Contact 1's smallest strict local minimum of the gap at a sample of a free stretch (both
+/// grid neighbours free, on the grid, not at an event), refined by the vertex of the parabola
+/// through the three: a flight's closest approach away from its contacts; NaN when there is none.
+double gap_dip(const std::vector<Sample>& s) {
+  double best = std::numeric_limits<double>::quiet_NaN();
+  for (std::size_t i = 1; i + 1 < s.size(); ++i) {
+    const Sample &a = s[i - 1], &m = s[i], &b = s[i + 1];
+    if (a.t == m.t || m.t == b.t) continue;                                  // an event's rows
+    if (std::abs((b.t - m.t) - (m.t - a.t)) > 1e-9 * (b.t - a.t)) continue;  // not the grid
+    if (a.contacts[0].phase != Phase::Free || m.contacts[0].phase != Phase::Free ||
+        b.contacts[0].phase != Phase::Free)
+      continue;
+    const double y0 = a.contacts[0].d_N, y1 = m.contacts[0].d_N, y2 = b.contacts[0].d_N;
+    const double curv = y0 - 2.0 * y1 + y2;
+    if (!(y0 > y1 && y2 > y1 && curv > 0.0)) continue;
+    const double v = y1 - (y2 - y0) * (y2 - y0) / (8.0 * curv);
+    if (!(v >= best)) best = v;
+  }
+  return best;
+}
+
 /// Everything about the orbit through x at lambda (x on its section's constraints), its section
 /// at the time t0 (NaN: the family's).
 bool make_point(const ModelFamily& family, double lambda, VecIn x, const ContinuationOptions& opt,
@@ -168,6 +190,11 @@ bool make_point(const ModelFamily& family, double lambda, VecIn x, const Continu
     }
     if (free) out.p.free_time += pm.period - t_prev;
   }
+  out.p.impact_speed_min = std::numeric_limits<double>::quiet_NaN();
+  for (const EventRecord& ev : run.events)
+    if (ev.kind == EventKind::Impact && ev.t > t0 && ev.t < t0 + pm.period &&
+        !(std::abs(ev.v_N_minus) >= out.p.impact_speed_min))
+      out.p.impact_speed_min = std::abs(ev.v_N_minus);
   if (expect && event_signature(run, t0) != *expect) {
     // the orbit's events changed (a grazing, a lift-off at the section): no chart of the
     // previous phases, no smooth continuation; the point is reported as it is
@@ -233,6 +260,7 @@ bool make_point(const ModelFamily& family, double lambda, VecIn x, const Continu
     p.F_N_min = std::min(p.F_N_min, s.contacts[0].F_N);
   }
   p.d_N_min = smallest_gap(sampled.samples);
+  p.d_N_dip = gap_dip(sampled.samples);
   return true;
 }
 
@@ -345,65 +373,103 @@ bool correct(const ModelFamily& family, const PointData& from, double s,
 /// secant's with two points) as its value, the two estimates' difference as its spread, and says
 /// so in `how`. Where the points allow neither (mixed, or the minimum not falling), `s` is left
 /// as it is.
-void locate_end(const std::vector<PointData>& pts, BranchSpecial& s) {
-  const std::size_t n = std::min<std::size_t>(pts.size(), 3);
-  if (n < 2) return;
-  // which quantity: every point in contact at every sample, or every point free at every one,
-  // or every point partly free
-  bool contact = true, free = true, flight = true;
-  for (std::size_t k = pts.size() - n; k < pts.size(); ++k) {
-    const BranchPoint& p = pts[k].p;
-    contact = contact && p.F_N_min > 0.0 && std::isfinite(p.F_N_min);
-    free = free && p.F_N_max == 0.0 && p.d_N_min > 0.0 && std::isfinite(p.d_N_min);
-    flight = flight && pts[k].p.free_time > 0.0 && pts[k].p.free_time < p.period;
-  }
-  if (!contact && !free && !flight) return;
-  std::vector<double> l, F;
-  for (std::size_t k = pts.size() - n; k < pts.size(); ++k) {
-    l.push_back(pts[k].p.lambda);
-    // a flight that shrinks to nothing between a lift-off and an impact: its gap is ~ a t (tau
-    // - t) / 2, and tau^2, not tau, is what falls linearly to zero where the contact force's
-    // minimum along the slide touches 0 (tau ~ sqrt(lambda - lambda_c))
-    F.push_back(contact ? pts[k].p.F_N_min
-                        : (free ? pts[k].p.d_N_min : pts[k].p.free_time * pts[k].p.free_time));
-  }
-  const std::size_t e = n - 1;
-  if (!(F[e] < F[e - 1]) || l[e] == l[e - 1]) return;
-  const double secant = l[e] - F[e] * (l[e] - l[e - 1]) / (F[e] - F[e - 1]);
-  double lambda = secant, spread = 0.0;
+/// The root nearest the last of lambda of F (falling towards it) through the last points
+/// (l, F): the parabola's through three, else the secant's; `secant` the secant's, `spread` the
+/// two's difference (without a parabola's root: the secant's whole reach beyond the last point).
+/// False when F does not fall towards the last point.
+bool extrapolate_root(const std::vector<double>& l, const std::vector<double>& F, double& root,
+                      double& secant, double& spread) {
+  const std::size_t n = l.size(), e = n - 1;
+  if (n < 2 || !(F[e] < F[e - 1]) || l[e] == l[e - 1]) return false;
+  secant = l[e] - F[e] * (l[e] - l[e - 1]) / (F[e] - F[e - 1]);
+  root = secant;
+  spread = std::abs(secant - l[e]);
   if (n == 3 && l[0] != l[1] && l[0] != l[2]) {
     // Newton's form of the parabola F(x) through the three, its root nearest l[e]
     const double d1 = (F[1] - F[0]) / (l[1] - l[0]), d2 = (F[2] - F[1]) / (l[2] - l[1]);
     const double c2 = (d2 - d1) / (l[2] - l[0]);
     // F(x) = F[2] + b (x - l[2]) + c2 (x - l[2])^2 with b = d2 + c2 (l[2] - l[1])
     const double b = d2 + c2 * (l[2] - l[1]);
-    double root = secant;
     if (c2 != 0.0) {
       const double disc = b * b - 4.0 * c2 * F[2];
       if (disc >= 0.0) {
         const double r1 = (-b + std::sqrt(disc)) / (2.0 * c2),
                      r2 = (-b - std::sqrt(disc)) / (2.0 * c2);
         root = l[2] + (std::abs(r1) < std::abs(r2) ? r1 : r2);
+        spread = std::abs(root - secant);
       }
+    } else {
+      spread = 0.0;  // the three on a line: the parabola is the secant
     }
-    spread = std::abs(root - secant);
-    lambda = root;
   }
-  s.lambda = lambda;
-  s.spread = spread;
-  if (flight && !contact && !free) {
-    s.how += fmt::format(
-        "; the square of the free flight's duration per period, {:.6g} s^2 at the last point, "
-        "extrapolated to zero from the last {} smooth points: the flight vanishes (its lift-off "
-        "meets its impact) at {:.10g} (secant {:.10g}, estimates {:.2g} apart)",
-        F[e], n, lambda, secant, spread);
-    return;
+  return std::isfinite(root);
+}
+
+void locate_end(const std::vector<PointData>& pts, BranchSpecial& s) {
+  const std::size_t n = std::min<std::size_t>(pts.size(), 3);
+  if (n < 2) return;
+  // the quantities whose zero is a switching surface, where the last points all have them:
+  // contact throughout (the contact force's minimum: lift-off), free throughout (the gap's
+  // minimum: grazing), impacts (the slowest impact's speed, squared: a grazing impact, where the
+  // impact's speed ~ sqrt(lambda - lambda_c)), partly free (the flight's duration, squared:
+  // a flight between a lift-off and an impact has a gap ~ t (tau - t), and tau ~ sqrt(lambda -
+  // lambda_c) where the slide's smallest contact force touches 0), a gap minimum in free flight
+  // away from the contacts (grazing: a new contact appears). Of those that fall towards the last
+  // point, the one whose zero comes first.
+  enum Q { Contact, Free, Impact, Flight, Dip };
+  bool has[5] = {true, true, true, true, true};
+  for (std::size_t k = pts.size() - n; k < pts.size(); ++k) {
+    const BranchPoint& p = pts[k].p;
+    has[Contact] = has[Contact] && p.F_N_min > 0.0 && std::isfinite(p.F_N_min);
+    has[Free] = has[Free] && p.F_N_max == 0.0 && p.d_N_min > 0.0 && std::isfinite(p.d_N_min) &&
+                std::isnan(p.impact_speed_min);
+    has[Impact] = has[Impact] && p.impact_speed_min > 0.0 && std::isfinite(p.impact_speed_min);
+    has[Flight] = has[Flight] && p.free_time > 0.0 && p.free_time < p.period;
+    has[Dip] = has[Dip] && p.d_N_dip > 0.0 && std::isfinite(p.d_N_dip);
   }
-  s.how += fmt::format(
-      "; the {}'s minimum over the period, {:.6g} {} at the last point, extrapolated to zero "
-      "from the last {} smooth points: {} at {:.10g} (secant {:.10g}, estimates {:.2g} apart)",
-      contact ? "contact force" : "gap", F[e], contact ? "N" : "m", n,
-      contact ? "lift-off" : "grazing", lambda, secant, spread);
+  if (has[Contact] || has[Free]) has[Impact] = has[Flight] = has[Dip] = false;
+  int best = -1;
+  double best_root = 0.0, best_secant = 0.0, best_spread = 0.0, best_last = 0.0;
+  std::vector<double> l;
+  for (std::size_t k = pts.size() - n; k < pts.size(); ++k) l.push_back(pts[k].p.lambda);
+  std::vector<std::pair<int, double>> roots;  // every quantity's estimate
+  for (int q = 0; q < 5; ++q) {
+    if (!has[q]) continue;
+    std::vector<double> F;
+    for (std::size_t k = pts.size() - n; k < pts.size(); ++k) {
+      const BranchPoint& p = pts[k].p;
+      F.push_back(q == Contact  ? p.F_N_min
+                  : q == Free   ? p.d_N_min
+                  : q == Impact ? p.impact_speed_min * p.impact_speed_min
+                  : q == Flight ? p.free_time * p.free_time
+                                : p.d_N_dip);
+    }
+    double root, secant, spread;
+    if (!extrapolate_root(l, F, root, secant, spread)) continue;
+    roots.push_back({q, root});
+    if (best < 0 || std::abs(root - l.back()) < std::abs(best_root - l.back()))
+      best = q, best_root = root, best_secant = secant, best_spread = spread, best_last = F.back();
+  }
+  if (best < 0) return;
+  s.lambda = best_root;
+  s.spread = best_spread;
+  static const char* what[] = {"the contact force's minimum over the period, {:.6g} N",
+                               "the gap's minimum over the period, {:.6g} m",
+                               "the slowest impact's closing speed squared, {:.6g} m^2/s^2",
+                               "the square of the free flight's duration per period, {:.6g} s^2",
+                               "the smallest gap minimum in free flight, {:.6g} m"};
+  static const char* end[] = {"lift-off", "grazing", "grazing impact (the impact's speed vanishes)",
+                              "the flight vanishes (its lift-off meets its impact)",
+                              "grazing (a new contact in the flight)"};
+  s.how += "; " + fmt::format(fmt::runtime(what[best]), best_last) +
+           fmt::format(
+               " at the last point, extrapolated to zero from the last {} smooth points: "
+               "{} at {:.10g} (secant {:.10g}, estimates {:.2g} apart)",
+               n, end[best], best_root, best_secant, s.spread);
+  for (const auto& [q, r] : roots)
+    if (q != best)
+      s.how += fmt::format("; from {} instead: {:.10g}",
+                           std::string(what[q]).substr(0, std::string(what[q]).find(',')), r);
 }
 
 /// Where to move the section of an orbit with an event within kSectionClearance of a period of
@@ -487,6 +553,88 @@ bool move_section(const ModelFamily& family, const ContinuationOptions& opt,
   cur = std::move(nb);
   moved_to = t_new;
   return true;
+}
+
+/// The real multipliers below -1.
+int below_minus_one(const FloquetAnalysis& f) {
+  int n = 0;
+  for (const auto& m : f.multipliers)
+    if (std::abs(m.value.imag()) <= kRealImag && m.value.real() < -1.0) ++n;
+  return n;
+}
+
+struct Located {
+  double lambda = 0.0, spread = 0.0;
+  std::string how;
+};
+
+/// Where a function g of the monodromy (chart-invariant: det(Phi + I), a multiplier's modulus)
+/// changes sign between point `from` (arclength 0, lambda_a) and the next point (arclength ds,
+/// lambda_b): regula falsi (Illinois) on the arclength, each evaluation a corrector solve from
+/// `from` and the finite differences' monodromy at the solution, until the bracket in lambda is
+/// below kLocateRel of the points' distance or kLocateIterations evaluations. Where an
+/// evaluation fails, the bracket so far (the midpoint of the last bracket in lambda, its half
+/// width as the spread).
+template <class G>
+Located locate_crossing(const ModelFamily& family, const PointData& from, double ds,
+                        const BranchPoint& a, const BranchPoint& b, const ContinuationOptions& opt,
+                        long& runs, G g) {
+  const double lambda_a = a.lambda, lambda_b = b.lambda;
+  const int d = from.chart->dim();
+  const auto eval = [&](double s, double& lam, double& val) {
+    Corrected c;
+    std::string why;
+    if (!correct(family, from, s, opt, c, why, runs)) return false;
+    lam = c.u(d) * opt.lambda_scale;
+    ParameterModel pm = family(lam);
+    const PeriodMap map(*pm.model, from.p.t0, pm.options);
+    const Vec xs = stacked_state(c.eval.run.samples.front());
+    const SectionChart chart(*pm.model, from.p.t0, xs, start_phases(c.eval.run),
+                             state_scale(*pm.model, pm.omega));
+    const long r0 = map.runs();
+    const Vec zero = Vec::Zero(chart.dim());
+    const Monodromy m = FiniteDifferenceMonodromy(opt.orbit.fd_steps)
+                            .compute(map, pm.period, chart, zero, c.eval.run);
+    runs += map.runs() - r0;
+    if (!m.ok || m.sequence_changed) return false;
+    val = g(m.M);
+    return std::isfinite(val);
+  };
+  // the two points' own monodromies give the ends
+  double s0 = 0.0, s1 = ds, l0 = lambda_a, l1 = lambda_b;
+  double g0 = g(a.monodromy.M), g1 = g(b.monodromy.M);
+  Located out;
+  int evals = 0;
+  const double tol = kLocateRel * std::abs(lambda_b - lambda_a);
+  if (!(g0 * g1 < 0.0)) {
+    out.lambda = 0.5 * (lambda_a + lambda_b);
+    out.spread = 0.5 * std::abs(lambda_b - lambda_a);
+    out.how = "the midpoint of the two points (g does not change sign between their monodromies)";
+    return out;
+  }
+  while (std::abs(l1 - l0) > tol && evals < kLocateIterations) {
+    const double s = (s0 * g1 - s1 * g0) / (g1 - g0);
+    double l, v;
+    if (!eval(s, l, v)) break;
+    ++evals;
+    if (v * g1 < 0.0) {
+      s0 = s1, l0 = l1, g0 = g1;
+    } else {
+      g0 *= 0.5;  // Illinois: the end kept twice in a row counts half
+    }
+    s1 = s, l1 = l, g1 = v;
+  }
+  out.lambda = l0 + (l1 - l0) * g0 / (g0 - g1);
+  out.spread = std::abs(l1 - l0);
+  out.how = evals == 0 ? fmt::format(
+                             "by linear interpolation of g between the two points (a "
+                             "corrector solve between them failed; bracket {:.2g})",
+                             out.spread)
+                       : fmt::format(
+                             "by regula falsi on corrector solves ({} evaluations, "
+                             "bracket {:.2g})",
+                             evals, out.spread);
+  return out;
 }
 
 }  // namespace
@@ -573,10 +721,20 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
         b.specials.push_back(sp);
         return done("events_change", sp.how);
       }
-      if (ds < opt.ds_min)
+      if (ds < opt.ds_min) {
+        // where the last points head for a switching surface (a grazing impact, whose
+        // saltation matrix grows as 1 / v_N and spoils the Jacobian first), its extrapolation
+        BranchSpecial sp;
+        sp.kind = "end";
+        sp.after = static_cast<int>(b.points.size()) - 1;
+        sp.lambda = std::numeric_limits<double>::quiet_NaN();
+        sp.how = "no step converges from the last point";
+        locate_end(pts, sp);
+        if (!std::isnan(sp.lambda)) b.specials.push_back(sp);
         return done("step_failed",
                     fmt::format("no step below ds_min = {:.3g} from lambda = {:.10g}: {}",
                                 opt.ds_min, cur.p.lambda, why));
+      }
       continue;
     }
     changed = false;
@@ -677,23 +835,41 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
           evals + 2, m0, m1);
       b.specials.push_back(f);
     }
-    const double n0 = nearest_real(a.floquet, -1.0), n1 = nearest_real(p.floquet, -1.0);
-    if (!std::isnan(n0) && !std::isnan(n1) && (n0 + 1.0) * (n1 + 1.0) < 0) {
+    if (std::abs(below_minus_one(a.floquet) - below_minus_one(p.floquet)) % 2 == 1) {
+      // a real multiplier through -1: det(Phi + I) changes sign (complex pairs add |mu + 1|^2)
       BranchSpecial s;
       s.kind = "period_doubling";
       s.after = i;
-      const double w = (n0 + 1.0) / (n0 - n1);  // linear in the arclength
-      s.lambda = a.lambda + w * (p.lambda - a.lambda);
-      s.how = fmt::format("a real multiplier crosses -1 ({:.6g} -> {:.6g}); linear interpolation",
-                          n0, n1);
+      const Located loc = locate_crossing(family, cur, ds, a, p, opt, runs, [](const Mat& M) {
+        return (M + Mat::Identity(M.rows(), M.cols())).determinant();
+      });
+      s.lambda = loc.lambda;
+      s.spread = loc.spread;
+      s.how = fmt::format(
+          "a real multiplier crosses -1 (the real multipliers below -1: {} -> {}); located where "
+          "det(Phi + I) changes sign, {}",
+          below_minus_one(a.floquet), below_minus_one(p.floquet), loc.how);
       b.specials.push_back(s);
     }
     if (neimark_sacker_between(a.floquet, p.floquet)) {
+      // the complex multiplier nearest the unit circle: its modulus minus 1 changes sign
       BranchSpecial s;
       s.kind = "neimark_sacker";
       s.after = i;
-      s.lambda = 0.5 * (a.lambda + p.lambda);
-      s.how = "a complex pair crosses the unit circle; the midpoint of the two points";
+      const Located loc = locate_crossing(family, cur, ds, a, p, opt, runs, [](const Mat& M) {
+        double best = std::numeric_limits<double>::quiet_NaN();
+        const Eigen::EigenSolver<Mat> es(M, false);
+        for (const auto& z : es.eigenvalues())
+          if (std::abs(z.imag()) > kRealImag && !(std::abs(std::abs(z) - 1.0) >= std::abs(best)))
+            best = std::abs(z) - 1.0;
+        return best;
+      });
+      s.lambda = loc.lambda;
+      s.spread = loc.spread;
+      s.how =
+          "a complex pair crosses the unit circle; located where the modulus of the complex "
+          "multiplier nearest the circle passes 1, " +
+          loc.how;
       b.specials.push_back(s);
     }
     if (p.signature != a.signature) {

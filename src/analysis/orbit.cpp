@@ -748,7 +748,10 @@ OrbitResult find_forced_orbit(const PeriodMap& map, VecIn guess, double T, doubl
                                 opt.max_iterations, res_norm, opt.tol));
     }
     if (!have_J) {
-      const Monodromy mj = newton_fd.compute(map, T, *chart, xi, run);
+      // the provider's derivative where one is given (sensitivities: no perturbed runs, so
+      // also next to a grazing, where the finite differences' perturbations cross it)
+      const Monodromy mj = opt.provider ? opt.provider->compute(map, T, *chart, xi, run)
+                                        : newton_fd.compute(map, T, *chart, xi, run);
       if (!mj.ok) {
         rec.runs = map.runs() - runs0;
         res.history.push_back(rec);
@@ -756,8 +759,9 @@ OrbitResult find_forced_orbit(const PeriodMap& map, VecIn guess, double T, doubl
       }
       J = mj.M - Mat::Identity(chart->dim(), chart->dim());
       have_J = true;
-      seed = std::make_unique<Seed>(Seed{mj, std::make_unique<SectionChart>(*chart), xi, x});
-      rec.jacobian = "finite differences";
+      if (!opt.provider)
+        seed = std::make_unique<Seed>(Seed{mj, std::make_unique<SectionChart>(*chart), xi, x});
+      rec.jacobian = opt.provider ? std::string(opt.provider->name()) : "finite differences";
     } else {
       rec.jacobian = "broyden";
     }

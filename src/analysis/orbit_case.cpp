@@ -358,8 +358,8 @@ std::string branch_csv(const CaseBranch& b) {
   for (const auto& p : b.branch.points) nm = std::max(nm, p.floquet.multipliers.size());
   std::string s = "point,";
   s += b.key;
-  s += ",arclength,period,amplitude,F_N_max,F_N_min,d_N_min,free_time,residual,stability,"
-       "mu_max_abs";
+  s += ",arclength,period,amplitude,F_N_max,F_N_min,d_N_min,d_N_dip,free_time,impact_speed_min,"
+       "residual,stability,mu_max_abs";
   for (std::size_t j = 1; j <= nm; ++j)
     s += fmt::format(",mu{0}_re,mu{0}_im,mu{0}_abs,mu{0}_error", j);
   s += ",corrector_iterations,runs,t0";  // t0: the section's time, where the state is
@@ -372,9 +372,10 @@ std::string branch_csv(const CaseBranch& b) {
   for (std::size_t i = 0; i < b.branch.points.size(); ++i) {
     const BranchPoint& p = b.branch.points[i];
     const auto& F = p.floquet.multipliers;
-    fmt::format_to(out, "{},{},{},{},{},{},{},{},{},{},{},{}", i, p.lambda, p.arclength, p.period,
-                   p.amplitude, p.F_N_max, p.F_N_min, p.d_N_min, p.free_time, p.residual,
-                   to_string(p.floquet.stability), F.empty() ? 0.0 : std::abs(F.front().value));
+    fmt::format_to(out, "{},{},{},{},{},{},{},{},{},{},{},{},{},{}", i, p.lambda, p.arclength,
+                   p.period, p.amplitude, p.F_N_max, p.F_N_min, p.d_N_min, p.d_N_dip, p.free_time,
+                   p.impact_speed_min, p.residual, to_string(p.floquet.stability),
+                   F.empty() ? 0.0 : std::abs(F.front().value));
     for (std::size_t j = 0; j < nm; ++j) {
       if (j < F.size())
         fmt::format_to(out, ",{},{},{},{}", F[j].value.real(), F[j].value.imag(),

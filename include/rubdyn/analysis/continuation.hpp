@@ -69,7 +69,13 @@ struct BranchPoint {
   /// through it and its two neighbours where it is a strict local minimum
   double d_N_min = 0.0;
   double free_time = 0.0;  ///< the time of the period in which every contact is free [s]
-  long runs = 0;           ///< runs of the return map for this point
+  /// contact 1's smallest gap minimum in free flight over the period, away from its contacts
+  /// (a strict local minimum of the sampled gap, refined by the parabola through it and its
+  /// neighbours): where it reaches 0 a new contact appears (grazing) [m]; NaN: none
+  double d_N_dip = std::numeric_limits<double>::quiet_NaN();
+  /// the slowest impact's closing speed over the period, |v_N-| [m/s]; NaN: no impact
+  double impact_speed_min = std::numeric_limits<double>::quiet_NaN();
+  long runs = 0;  ///< runs of the return map for this point
   double t0 =
       0.0;  ///< the section's time (moved away from the orbit's events: Branch::section_moves)
 };

@@ -327,7 +327,8 @@ struct OrbitOptions {
   /// Samples of the orbit's final run per period (orbit.csv); 0: no sampled run (the run of the
   /// last iterate, its ends and events, stands for it)
   int samples = 200;
-  /// A provider of the final monodromy instead of finite differences (nullptr: them).
+  /// A provider of the final monodromy instead of finite differences (nullptr: them); a forced
+  /// orbit's Newton takes its Jacobians from it too (Broyden's updates between them as before).
   const MonodromyProvider* provider = nullptr;
 };
 
