@@ -566,6 +566,10 @@ int below_minus_one(const FloquetAnalysis& f) {
 struct Located {
   double lambda = 0.0, spread = 0.0;
   std::string how;
+  /// The evaluation nearest the crossing (smallest |g|): its orbit's state at the section and
+  /// the direction (full state, unit in the scaled state) of its multiplier nearest `target`
+  /// (a period doubling's -1); empty when no evaluation succeeded.
+  Vec x, direction;
 };
 
 /// Where a function g of the monodromy (chart-invariant: det(Phi + I), a multiplier's modulus)
@@ -578,9 +582,11 @@ struct Located {
 template <class G>
 Located locate_crossing(const ModelFamily& family, const PointData& from, double ds,
                         const BranchPoint& a, const BranchPoint& b, const ContinuationOptions& opt,
-                        long& runs, G g) {
+                        long& runs, G g, double target = -1.0) {
   const double lambda_a = a.lambda, lambda_b = b.lambda;
   const int d = from.chart->dim();
+  Located out;
+  double best_g = std::numeric_limits<double>::infinity();
   const auto eval = [&](double s, double& lam, double& val) {
     Corrected c;
     std::string why;
@@ -598,12 +604,24 @@ Located locate_crossing(const ModelFamily& family, const PointData& from, double
     runs += map.runs() - r0;
     if (!m.ok || m.sequence_changed) return false;
     val = g(m.M);
+    if (std::isfinite(val) && std::abs(val) < best_g) {
+      // the multiplier nearest the target and its direction as a full state
+      best_g = std::abs(val);
+      const Eigen::EigenSolver<Mat> es(m.M);
+      Eigen::Index k = 0;
+      for (Eigen::Index i = 1; i < es.eigenvalues().size(); ++i)
+        if (std::abs(es.eigenvalues()(i) - target) < std::abs(es.eigenvalues()(k) - target)) k = i;
+      const Vec D = chart.scale();
+      Vec v = chart.tangent(zero) * es.eigenvectors().col(k).real();
+      const double scaled = (v.array() / D.array()).matrix().norm();
+      out.x = xs;
+      out.direction = scaled > 0.0 ? Vec(v / scaled) : v;
+    }
     return std::isfinite(val);
   };
   // the two points' own monodromies give the ends
   double s0 = 0.0, s1 = ds, l0 = lambda_a, l1 = lambda_b;
   double g0 = g(a.monodromy.M), g1 = g(b.monodromy.M);
-  Located out;
   int evals = 0;
   const double tol = kLocateRel * std::abs(lambda_b - lambda_a);
   if (!(g0 * g1 < 0.0)) {
@@ -845,6 +863,9 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
       });
       s.lambda = loc.lambda;
       s.spread = loc.spread;
+      s.x = loc.x;
+      s.direction = loc.direction;
+      s.t0 = cur.p.t0;
       s.how = fmt::format(
           "a real multiplier crosses -1 (the real multipliers below -1: {} -> {}); located where "
           "det(Phi + I) changes sign, {}",

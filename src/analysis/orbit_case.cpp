@@ -404,12 +404,26 @@ std::string branch_json(const CaseBranch& b) {
     const auto& x = r.specials[i];
     fmt::format_to(out,
                    "{}\n    {{\"kind\": {}, \"value\": {}, \"spread\": {}, \"between\": [{}, {}], "
-                   "\"how\": {}}}",
+                   "\"how\": {}",
                    i ? "," : "", str(x.kind), num(x.lambda), num(x.spread), x.after,
                    // null: beyond the last point (the corrector's iterates crossed it)
                    x.after + 1 < static_cast<int>(r.points.size()) ? std::to_string(x.after + 1)
                                                                    : std::string("null"),
                    str(x.how));
+    if (x.x.size() == static_cast<Eigen::Index>(b.state_names.size()) &&
+        x.direction.size() == x.x.size()) {
+      // a period doubling's orbit and the direction of its multiplier -1: the period-2 branch
+      fmt::format_to(out, ", \"t0\": {}, \"state\": {{", num(x.t0));
+      for (std::size_t j = 0; j < b.state_names.size(); ++j)
+        fmt::format_to(out, "{}{}: {}", j ? ", " : "", str(b.state_names[j]),
+                       num(x.x(static_cast<Eigen::Index>(j))));
+      s += "}, \"direction\": {";
+      for (std::size_t j = 0; j < b.state_names.size(); ++j)
+        fmt::format_to(out, "{}{}: {}", j ? ", " : "", str(b.state_names[j]),
+                       num(x.direction(static_cast<Eigen::Index>(j))));
+      s += '}';
+    }
+    s += '}';
   }
   fmt::format_to(out, "\n  ],\n  \"section_moves\": [");
   for (std::size_t i = 0; i < r.section_moves.size(); ++i)

@@ -307,9 +307,12 @@ TEST_CASE("orbit: a continuation moves its section away from the orbit's events"
 // 250 rad/s): down in the speed a real multiplier leaves through -1 (a period doubling), up a
 // second contact appears in the flight (a grazing). Each is located by the continuation and
 // checked here on orbits found independently on both sides, with the monodromy from
-// sensitivities.
-TEST_CASE("orbit: the continuation locates the impact oscillator's period doubling and grazing",
-          "[orbit]") {
+// sensitivities; from the period doubling's orbit and its multiplier -1's direction, the
+// period-2 orbits are found below it.
+TEST_CASE(
+    "orbit: the continuation locates the impact oscillator's period doubling and grazing, and "
+    "switches to the period-2 branch",
+    "[orbit]") {
   Scene p;
   p.e_n = 0.8;
   p.rtol = 1e-10;
@@ -357,6 +360,45 @@ TEST_CASE("orbit: the continuation locates the impact oscillator's period doubli
   // (error ~1e-4 near there) on a slope of 0.39 per rad/s: a bound of 3e-4 rad/s; measured
   // 3.8e-7 from the sensitivities' zero (whose own error, ~1e-6 / 0.39, is below that)
   CHECK(std::abs(zero - pd->lambda) <= 3e-4);
+
+  // branch switching: the period-2 orbit from the period doubling's orbit moved along the
+  // direction of its multiplier -1, with the period doubled, on the side where the period-1
+  // orbit is unstable (below: its real multiplier < -1 there)
+  REQUIRE(pd->x.size() == 4);
+  REQUIRE(pd->direction.size() == 4);
+  double split[2], mu2[2];
+  const double below[2] = {0.2, 0.05};
+  for (int k = 0; k < 2; ++k) {
+    const double w = pd->lambda - below[k];
+    const ParameterModel pm = family(w);
+    const PeriodMap map(*pm.model, pm.t0, pm.options);
+    static const SensitivityMonodromy sens;
+    OrbitOptions oo;
+    oo.provider = &sens;
+    oo.samples = 0;
+    const Vec D = state_scale(*pm.model, pm.omega);
+    const Vec guess = pd->x + 0.05 * pd->direction;
+    const OrbitResult r2 = find_forced_orbit(map, guess, 2.0 * pm.period, pm.omega, oo);
+    INFO("period 2 at " << w << ": " << r2.message << "; " << r2.floquet.reason);
+    REQUIRE(r2.converged());
+    const FlowRun one = map.run(r2.x0, pm.period);
+    REQUIRE(one.complete());
+    // a period-2 orbit, not the period-1 orbit counted twice: one period moves it by far more
+    // than Newton's tolerance; two impacts in its period; stable (a supercritical doubling)
+    split[k] = ((stacked_state(one.samples.back()) - r2.x0).array() / D.array()).abs().maxCoeff();
+    mu2[k] = std::abs(r2.floquet.multipliers.front().value);
+    INFO("split " << split[k] << ", largest multiplier " << mu2[k]);
+    CHECK(split[k] > 1e4 * oo.tol);
+    CHECK(r2.events.size() == 2);
+    CHECK(r2.floquet.stability == Stability::Stable);
+  }
+  // The period-2 orbits branch off as sqrt(lambda_PD - lambda): the splits 0.2 and 0.05 rad/s
+  // below are in the ratio 2 (measured 0.0848 and 0.0428: 1.98; the next term is O(lambda_PD -
+  // lambda) relative, a few %: bound 10 %), and their largest multiplier goes to +1 linearly
+  // (the square of the period-1 orbit's -1): 1 - mu in the ratio 4 (measured 0.523 and 0.887:
+  // 4.2; bound 20 %)
+  CHECK(std::abs(split[0] / split[1] / 2.0 - 1.0) <= 0.1);
+  CHECK(std::abs((1.0 - mu2[0]) / (1.0 - mu2[1]) / 4.0 - 1.0) <= 0.2);
 
   // up: the grazing of the flight (a second contact appears)
   opt.direction = +1;

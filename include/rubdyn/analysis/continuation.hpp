@@ -89,6 +89,12 @@ struct BranchSpecial {
   /// `how`); 0: no such estimate
   double spread = 0.0;
   std::string how;  ///< how it was detected and located
+  /// A period doubling: the orbit nearest it (the locating evaluation with the smallest
+  /// det(Phi + I)) as its state at the section time t0, and the direction of its multiplier
+  /// near -1 (full state, unit in the scaled state). The period-2 branch starts from
+  /// x +- eps direction with the period doubled (branch switching, docs/orbits.md section 10).
+  Vec x, direction;
+  double t0 = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct Branch {
