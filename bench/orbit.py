@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Speed of `rubdyn orbit` on cases/full-rub.toml (the issue 33 target: one orbit of the Jeffcott
 full-rub case with its multipliers in under 0.1 s). Runs the CLI N times one after the other and
-writes bench/ORBIT.md: per repetition the search's own wall time (orbit.json wall_seconds:
+writes bench/ORBIT.md (also the same search with --monodromy sensitivities, run alternately):
+per repetition the search's own wall time (orbit.json wall_seconds:
 Newton, the monodromy's runs and the sampled period), the CLI process's wall and CPU time, and
 the number of runs of the return map; the median and the minimum, with the machine and its load
 (on a shared machine the CPU time is the steadier measure: wall time grows with the load).
@@ -42,23 +43,25 @@ def main():
     commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
                             capture_output=True, text=True).stdout.strip()
     loads = [os.getloadavg()]
-    rows = []
+    rows, srows = [], []
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(a.n):
-            out = os.path.join(tmp, "o")
-            before = resource.getrusage(resource.RUSAGE_CHILDREN)
-            t = time.perf_counter()
-            p = subprocess.run([a.cli, "orbit", a.case, "--out", out], capture_output=True,
-                               text=True)
-            wall = time.perf_counter() - t
-            after = resource.getrusage(resource.RUSAGE_CHILDREN)
-            if p.returncode != 0:
-                raise SystemExit(f"rubdyn orbit failed ({p.returncode}): {p.stderr}")
-            with open(os.path.join(out, "orbit.json")) as f:
-                d = json.load(f)
-            cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-            rows.append((d["wall_seconds"], wall, cpu, d["runs"], d["stability"],
-                         len(d["newton"]) - 1))
+            # the default search and the one with --monodromy sensitivities, alternately
+            for extra, into in (([], rows), (["--monodromy", "sensitivities"], srows)):
+                out = os.path.join(tmp, "o")
+                before = resource.getrusage(resource.RUSAGE_CHILDREN)
+                t = time.perf_counter()
+                p = subprocess.run([a.cli, "orbit", a.case, "--out", out, *extra],
+                                   capture_output=True, text=True)
+                wall = time.perf_counter() - t
+                after = resource.getrusage(resource.RUSAGE_CHILDREN)
+                if p.returncode != 0:
+                    raise SystemExit(f"rubdyn orbit failed ({p.returncode}): {p.stderr}")
+                with open(os.path.join(out, "orbit.json")) as f:
+                    d = json.load(f)
+                cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+                into.append((d["wall_seconds"], wall, cpu, d["runs"], d["stability"],
+                             len(d["newton"]) - 1))
         # the continuation: rubdyn branch in the spin speed, 200 points asked (the branch ends
         # earlier where its orbits lift off: the time per point is the measure)
         out = os.path.join(tmp, "b")
@@ -99,6 +102,14 @@ def main():
         f"{max(proc):.4f} |",
         f"| the CLI process, CPU (user + system) | {statistics.median(cpu):.4f} | {min(cpu):.4f} | "
         f"{max(cpu):.4f} |",
+        "",
+        f"With `--monodromy sensitivities` (docs/orbits.md section 7; run alternately with the "
+        f"above): {srows[0][5]} Newton iteration(s), {srows[0][3]} runs of the return map "
+        f"(Newton's Jacobian and the monodromy from the variational equations, at two "
+        f"tolerances), verdict {srows[0][4]}; CPU median "
+        f"{statistics.median([r[2] for r in srows]):.4f} s, "
+        f"{statistics.median([r[2] for r in srows]) / statistics.median(cpu):.2f}x the default's; "
+        f"the search {statistics.median([r[0] for r in srows]):.4f} s median.",
         "",
         f"The continuation (issue 33's target: 200 points in under 30 s): `rubdyn branch "
         f"{os.path.relpath(a.case, ROOT)} --vary initial.omega0 --points 200 --ds-max 3` gave "
