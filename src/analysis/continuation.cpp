@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 namespace rubdyn {
 
@@ -46,7 +47,44 @@ struct PointData {
   /// The orbit's events after the section, as offsets from it in (0, T) (the decision at the
   /// section is its start, not an event), each with whether every contact is free after it
   std::vector<std::pair<double, bool>> event_offsets;
+  /// An autonomous orbit's unknowns: the section coordinate fixed by the phase condition (it
+  /// is left out of u, whose component d - 1 is the period per T_ref instead); -1: forced
+  int phase = -1;
+  double T_ref = 0.0;
 };
+
+/// The section coordinates, the period and the parameter of the unknowns u of the point `from`
+/// (u = (xi, lambda / s) for a forced orbit, (xi without the phase coordinate, T / T_ref,
+/// lambda / s) for an autonomous one; the period NaN for a forced orbit: the family's).
+void unpack(const PointData& from, VecIn u, double lambda_scale, Vec& xi, double& T,
+            double& lambda) {
+  const int d = static_cast<int>(u.size()) - 1;
+  lambda = u(d) * lambda_scale;
+  if (from.phase < 0) {
+    xi = u.head(d);
+    T = std::numeric_limits<double>::quiet_NaN();
+    return;
+  }
+  xi.resize(d);
+  for (int i = 0, k = 0; i < d; ++i) xi(i) = i == from.phase ? 0.0 : u(k++);
+  T = u(d - 1) * from.T_ref;
+}
+
+/// The unknowns, in the point `at`'s coordinates, of the orbit through x (period T) at lambda.
+Vec pack(const PointData& at, VecIn x, double T, double lambda, double lambda_scale) {
+  const Vec xi = at.chart->coords(x);
+  const int d = static_cast<int>(xi.size());
+  Vec u(d + 1);
+  if (at.phase < 0) {
+    u.head(d) = xi;
+  } else {
+    for (int i = 0, k = 0; i < d; ++i)
+      if (i != at.phase) u(k++) = xi(i);
+    u(d - 1) = T / at.T_ref;
+  }
+  u(d) = lambda / lambda_scale;
+  return u;
+}
 
 struct Eval {
   bool ok = false;
@@ -58,7 +96,7 @@ struct Eval {
 };
 
 Eval evaluate(const ModelFamily& family, const SectionChart& chart, VecIn xi, double lambda,
-              long& runs) {
+              long& runs, double T = std::numeric_limits<double>::quiet_NaN()) {
   Eval e;
   ParameterModel pm;
   try {
@@ -84,7 +122,7 @@ Eval evaluate(const ModelFamily& family, const SectionChart& chart, VecIn xi, do
     return e;
   }
   const PeriodMap map(*pm.model, t0, pm.options);
-  e.run = map.run(x, pm.period);
+  e.run = map.run(x, std::isnan(T) ? pm.period : T);
   ++runs;
   if (!e.run.complete()) {
     e.why = fmt::format("a run at {:.10g} ended early ({}): {}", lambda,
@@ -152,11 +190,14 @@ double gap_dip(const std::vector<Sample>& s) {
 /// at the time t0 (NaN: the family's).
 bool make_point(const ModelFamily& family, double lambda, VecIn x, const ContinuationOptions& opt,
                 PointData& out, std::string& why, long& runs, const std::string* expect = nullptr,
-                double t0 = std::numeric_limits<double>::quiet_NaN()) {
+                double t0 = std::numeric_limits<double>::quiet_NaN(),
+                double T = std::numeric_limits<double>::quiet_NaN()) {
   ParameterModel pm = family(lambda);
   if (std::isnan(t0)) t0 = pm.t0;
+  // the period: the family's (forced), or the orbit's own (autonomous: found with it)
+  const double period = std::isnan(T) ? pm.period : T;
   const PeriodMap map(*pm.model, t0, pm.options);
-  const FlowRun run = map.run(x, pm.period);
+  const FlowRun run = map.run(x, period);
   ++runs;
   if (!run.complete()) {
     why =
@@ -167,7 +208,7 @@ bool make_point(const ModelFamily& family, double lambda, VecIn x, const Continu
   out.p.t0 = t0;
   out.event_offsets.clear();
   for (const EventRecord& ev : run.events) {
-    if (!(ev.t > t0 && ev.t < t0 + pm.period)) continue;
+    if (!(ev.t > t0 && ev.t < t0 + period)) continue;
     if (!out.event_offsets.empty() && out.event_offsets.back().first == ev.t - t0) continue;
     // the phases after the event: the last sample at its time
     bool free = true;
@@ -188,71 +229,111 @@ bool make_point(const ModelFamily& family, double lambda, VecIn x, const Continu
       t_prev = o;
       free = f;
     }
-    if (free) out.p.free_time += pm.period - t_prev;
+    if (free) out.p.free_time += period - t_prev;
   }
   out.p.impact_speed_min = std::numeric_limits<double>::quiet_NaN();
   for (const EventRecord& ev : run.events)
-    if (ev.kind == EventKind::Impact && ev.t > t0 && ev.t < t0 + pm.period &&
+    if (ev.kind == EventKind::Impact && ev.t > t0 && ev.t < t0 + period &&
         !(std::abs(ev.v_N_minus) >= out.p.impact_speed_min))
       out.p.impact_speed_min = std::abs(ev.v_N_minus);
   if (expect && event_signature(run, t0) != *expect) {
     // the orbit's events changed (a grazing, a lift-off at the section): no chart of the
     // previous phases, no smooth continuation; the point is reported as it is
     out.p.lambda = lambda;
-    out.p.period = pm.period;
+    out.p.period = period;
     out.p.x0 = xs;
     out.p.signature = event_signature(run, t0);
     out.p.floquet.reason = "not computed: the orbit's events changed";
     out.chart.reset();
     return true;
   }
-  const Vec D = state_scale(*pm.model, pm.omega);
-  out.chart = std::make_unique<SectionChart>(*pm.model, t0, xs, start_phases(run), D);
+  // an autonomous orbit's velocities scaled by its own frequency (as find_case_orbit does)
+  const Vec D = state_scale(*pm.model, pm.autonomous ? 2.0 * std::numbers::pi / period : pm.omega);
+  out.chart = std::make_unique<SectionChart>(*pm.model, t0, xs, start_phases(run), D,
+                                             pm.autonomous ? pm.pinned : std::vector<int>{});
   const SectionChart& chart = *out.chart;
   const int d = chart.dim();
   const Vec zero = Vec::Zero(d);
+  const int samples = std::max(8, opt.orbit.samples);
+  const FlowRun sampled = map.run(xs, period, period / samples);
+  ++runs;
+  if (!sampled.complete() || sampled.samples.size() < 2) {
+    why = fmt::format("the sampled run on the point at {:.10g} ended early", lambda);
+    return false;
+  }
+  out.phase = -1;
+  out.T_ref = period;
+  if (pm.autonomous) {
+    // the phase condition: the section coordinate along which the flow moves fastest
+    Eigen::Index j = 0;
+    for (const Sample& smp : sampled.samples)
+      if (smp.t > t0) {
+        chart.coords(stacked_state(smp)).cwiseAbs().maxCoeff(&j);
+        break;
+      }
+    out.phase = static_cast<int>(j);
+  }
   const FiniteDifferenceMonodromy fd(opt.orbit.fd_steps);
   const long runs_before = map.runs();
-  Monodromy m = fd.compute(map, pm.period, chart, zero, run);
+  Monodromy m = fd.compute(map, period, chart, zero, run);
   const Mat tangent = chart.tangent(zero);
-  FloquetAnalysis fl = floquet_analysis(m, tangent, D);
+  FloquetAnalysis fl = floquet_analysis(m, tangent, D, pm.autonomous);
   for (int k = 0; k < opt.orbit.fd_refinements && fl.stability == Stability::Undecided &&
-                  fd.refine(map, pm.period, chart, zero, run, m);
+                  fd.refine(map, period, chart, zero, run, m);
        ++k)
-    fl = floquet_analysis(m, tangent, D);
+    fl = floquet_analysis(m, tangent, D, pm.autonomous);
   runs += map.runs() - runs_before;
   if (!m.ok) {
     why = "the monodromy at " + fmt::format("{:.10g}", lambda) + ": " + m.failure;
     return false;
   }
-  // G_lambda by central differences at the same state
+  // G_lambda by central differences at the same state (and period)
+  const double Tg = pm.autonomous ? period : std::numeric_limits<double>::quiet_NaN();
   const double h = kLambdaStep * opt.lambda_scale;
-  const Eval ep = evaluate(family, chart, zero, lambda + h, runs);
-  const Eval em = evaluate(family, chart, zero, lambda - h, runs);
+  const Eval ep = evaluate(family, chart, zero, lambda + h, runs, Tg);
+  const Eval em = evaluate(family, chart, zero, lambda - h, runs, Tg);
   if (!ep.ok || !em.ok) {
     why = "G_lambda: " + (ep.ok ? em.why : ep.why);
     return false;
   }
   out.J.resize(d, d + 1);
-  out.J.leftCols(d) = m.M - Mat::Identity(d, d);
+  const Mat A = m.M - Mat::Identity(d, d);
+  if (out.phase < 0) {
+    out.J.leftCols(d) = A;
+  } else {
+    // the phase coordinate's column replaced by d G / d(T / T_ref), central differences in T
+    for (int i = 0, k = 0; i < d; ++i)
+      if (i != out.phase) out.J.col(k++) = A.col(i);
+    const double hT = opt.orbit.newton_step;
+    const Eval tp = evaluate(family, chart, zero, lambda, runs, period * (1.0 + hT));
+    const Eval tm = evaluate(family, chart, zero, lambda, runs, period * (1.0 - hT));
+    if (!tp.ok || !tm.ok) {
+      why = "G_T: " + (tp.ok ? tm.why : tp.why);
+      return false;
+    }
+    out.J.col(d - 1) = (tp.G - tm.G) / (2.0 * hT);
+  }
   out.J.col(d) = (ep.G - em.G) / (2.0 * h) * opt.lambda_scale;
   const Eigen::JacobiSVD<Mat> svd(out.J, Eigen::ComputeFullV);
   out.t = svd.matrixV().col(d);
   // the sampled period: amplitude and forces
   BranchPoint& p = out.p;
   p.lambda = lambda;
-  p.period = pm.period;
+  p.period = period;
   p.x0 = xs;
   p.residual = chart.scaled_distance(xs, stacked_state(run.samples.back()));
   p.monodromy = std::move(m);
   p.floquet = std::move(fl);
   p.signature = event_signature(run, t0);
-  const int samples = std::max(8, opt.orbit.samples);
-  const FlowRun sampled = map.run(xs, pm.period, pm.period / samples);
-  ++runs;
   p.F_N_min = std::numeric_limits<double>::infinity();
   p.F_N_max = 0.0;
+  p.cone_min = std::numeric_limits<double>::quiet_NaN();
+  const double mu = pm.model->contact_law(0).mu;
   for (const Sample& s : sampled.samples) {
+    if (s.contacts[0].phase == Phase::Stick) {
+      const double margin = mu * s.contacts[0].F_N - std::abs(s.contacts[0].F_T);
+      if (!(margin >= p.cone_min)) p.cone_min = margin;
+    }
     PlaneMotion pl;
     if (pm.model->plane_motion(0, s.t, s.q, s.v, pl))
       p.amplitude = std::max(p.amplitude, pl.rotor.norm());
@@ -267,7 +348,9 @@ bool make_point(const ModelFamily& family, double lambda, VecIn x, const Continu
 /// The real multiplier nearest to `target` (+1 or -1), or NaN.
 double nearest_real(const FloquetAnalysis& f, double target) {
   double best = std::numeric_limits<double>::quiet_NaN();
-  for (const auto& m : f.multipliers) {
+  for (std::size_t i = 0; i < f.multipliers.size(); ++i) {
+    const auto& m = f.multipliers[i];
+    if (static_cast<int>(i) == f.trivial) continue;  // an autonomous orbit's flow direction
     if (std::abs(m.value.imag()) > kRealImag) continue;
     if (std::isnan(best) || std::abs(m.value.real() - target) < std::abs(best - target))
       best = m.value.real();
@@ -299,6 +382,7 @@ bool neimark_sacker_between(const FloquetAnalysis& a, const FloquetAnalysis& b) 
 /// t . (u - u_from) = s. Returns false when it does not converge.
 struct Corrected {
   Vec u;
+  double T = 0.0;  ///< the period of the corrected orbit
   Eval eval;
   int iterations = 0;
   /// An iterate whose orbit has other events than the point corrected from (a grazing or a
@@ -311,17 +395,18 @@ bool correct(const ModelFamily& family, const PointData& from, double s,
              const ContinuationOptions& opt, Corrected& out, std::string& why, long& runs) {
   const SectionChart& chart = *from.chart;
   const int d = chart.dim();
-  Vec u0 = Vec::Zero(d + 1);
-  u0(d) = from.p.lambda / opt.lambda_scale;
+  const Vec u0 = pack(from, from.p.x0, from.p.period, from.p.lambda, opt.lambda_scale);
   const Vec up = u0 + s * from.t;
   Mat A(d + 1, d + 1);
   A.topRows(d) = from.J;
   A.row(d) = from.t.transpose();
   Vec u = up;
   // Newton with point i's Jacobian (and the arclength row), improved by Broyden's updates
-  Vec F_prev, step_prev;
+  Vec F_prev, step_prev, xi;
+  double T, lam;
   for (int it = 0; it < opt.max_corrector; ++it) {
-    Eval e = evaluate(family, chart, u.head(d), u(d) * opt.lambda_scale, runs);
+    unpack(from, u, opt.lambda_scale, xi, T, lam);
+    Eval e = evaluate(family, chart, xi, lam, runs, T);
     if (!e.ok) {
       if (e.penetrates && !out.events_changed) {
         out.events_changed = true;
@@ -344,6 +429,7 @@ bool correct(const ModelFamily& family, const PointData& from, double s,
     const double res = e.G.size() ? e.G.cwiseAbs().maxCoeff() : 0.0;
     if (res <= opt.orbit.tol) {
       out.u = u;
+      out.T = T;
       out.eval = std::move(e);
       out.iterations = it;
       return true;
@@ -414,10 +500,11 @@ void locate_end(const std::vector<PointData>& pts, BranchSpecial& s) {
   // impact's speed ~ sqrt(lambda - lambda_c)), partly free (the flight's duration, squared:
   // a flight between a lift-off and an impact has a gap ~ t (tau - t), and tau ~ sqrt(lambda -
   // lambda_c) where the slide's smallest contact force touches 0), a gap minimum in free flight
-  // away from the contacts (grazing: a new contact appears). Of those that fall towards the last
-  // point, the one whose zero comes first.
-  enum Q { Contact, Free, Impact, Flight, Dip };
-  bool has[5] = {true, true, true, true, true};
+  // away from the contacts (grazing: a new contact appears), the friction cone's margin mu F_N -
+  // |F_T| where the contact sticks (the stick breaks into slip). Of those that fall towards the
+  // last point, the one whose zero comes first.
+  enum Q { Contact, Free, Impact, Flight, Dip, Cone };
+  bool has[6] = {true, true, true, true, true, true};
   for (std::size_t k = pts.size() - n; k < pts.size(); ++k) {
     const BranchPoint& p = pts[k].p;
     has[Contact] = has[Contact] && p.F_N_min > 0.0 && std::isfinite(p.F_N_min);
@@ -426,6 +513,7 @@ void locate_end(const std::vector<PointData>& pts, BranchSpecial& s) {
     has[Impact] = has[Impact] && p.impact_speed_min > 0.0 && std::isfinite(p.impact_speed_min);
     has[Flight] = has[Flight] && p.free_time > 0.0 && p.free_time < p.period;
     has[Dip] = has[Dip] && p.d_N_dip > 0.0 && std::isfinite(p.d_N_dip);
+    has[Cone] = has[Cone] && p.cone_min > 0.0 && std::isfinite(p.cone_min);
   }
   if (has[Contact] || has[Free]) has[Impact] = has[Flight] = has[Dip] = false;
   int best = -1;
@@ -433,7 +521,7 @@ void locate_end(const std::vector<PointData>& pts, BranchSpecial& s) {
   std::vector<double> l;
   for (std::size_t k = pts.size() - n; k < pts.size(); ++k) l.push_back(pts[k].p.lambda);
   std::vector<std::pair<int, double>> roots;  // every quantity's estimate
-  for (int q = 0; q < 5; ++q) {
+  for (int q = 0; q < 6; ++q) {
     if (!has[q]) continue;
     std::vector<double> F;
     for (std::size_t k = pts.size() - n; k < pts.size(); ++k) {
@@ -442,7 +530,8 @@ void locate_end(const std::vector<PointData>& pts, BranchSpecial& s) {
                   : q == Free   ? p.d_N_min
                   : q == Impact ? p.impact_speed_min * p.impact_speed_min
                   : q == Flight ? p.free_time * p.free_time
-                                : p.d_N_dip);
+                  : q == Dip    ? p.d_N_dip
+                                : p.cone_min);
     }
     double root, secant, spread;
     if (!extrapolate_root(l, F, root, secant, spread)) continue;
@@ -457,10 +546,14 @@ void locate_end(const std::vector<PointData>& pts, BranchSpecial& s) {
                                "the gap's minimum over the period, {:.6g} m",
                                "the slowest impact's closing speed squared, {:.6g} m^2/s^2",
                                "the square of the free flight's duration per period, {:.6g} s^2",
-                               "the smallest gap minimum in free flight, {:.6g} m"};
-  static const char* end[] = {"lift-off", "grazing", "grazing impact (the impact's speed vanishes)",
+                               "the smallest gap minimum in free flight, {:.6g} m",
+                               "the friction cone's smallest margin in stick, {:.6g} N"};
+  static const char* end[] = {"lift-off",
+                              "grazing",
+                              "grazing impact (the impact's speed vanishes)",
                               "the flight vanishes (its lift-off meets its impact)",
-                              "grazing (a new contact in the flight)"};
+                              "grazing (a new contact in the flight)",
+                              "slip onset (the stick breaks)"};
   s.how += "; " + fmt::format(fmt::runtime(what[best]), best_last) +
            fmt::format(
                " at the last point, extrapolated to zero from the last {} smooth points: "
@@ -515,6 +608,7 @@ bool move_section(const ModelFamily& family, const ContinuationOptions& opt,
                   std::vector<PointData>& pts, long& runs, double& moved_to, std::string& why) {
   moved_to = std::numeric_limits<double>::quiet_NaN();
   PointData& cur = pts.back();
+  if (cur.phase >= 0) return true;  // autonomous: the section is a hyperplane, not a time
   const double off = new_section_offset(cur.event_offsets, cur.p.period);
   if (std::isnan(off)) return true;
   const double t_new = cur.p.t0 + off;
@@ -593,14 +687,17 @@ Located locate_crossing(const ModelFamily& family, const PointData& from, double
     if (!correct(family, from, s, opt, c, why, runs)) return false;
     lam = c.u(d) * opt.lambda_scale;
     ParameterModel pm = family(lam);
+    const double period = std::isnan(c.T) ? pm.period : c.T;
     const PeriodMap map(*pm.model, from.p.t0, pm.options);
     const Vec xs = stacked_state(c.eval.run.samples.front());
-    const SectionChart chart(*pm.model, from.p.t0, xs, start_phases(c.eval.run),
-                             state_scale(*pm.model, pm.omega));
+    const SectionChart chart(
+        *pm.model, from.p.t0, xs, start_phases(c.eval.run),
+        state_scale(*pm.model, pm.autonomous ? 2.0 * std::numbers::pi / period : pm.omega),
+        pm.autonomous ? pm.pinned : std::vector<int>{});
     const long r0 = map.runs();
     const Vec zero = Vec::Zero(chart.dim());
-    const Monodromy m = FiniteDifferenceMonodromy(opt.orbit.fd_steps)
-                            .compute(map, pm.period, chart, zero, c.eval.run);
+    const Monodromy m =
+        FiniteDifferenceMonodromy(opt.orbit.fd_steps).compute(map, period, chart, zero, c.eval.run);
     runs += map.runs() - r0;
     if (!m.ok || m.sequence_changed) return false;
     val = g(m.M);
@@ -680,7 +777,10 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
   const PeriodMap map0(*pm0.model, pm0.t0, pm0.options);
   OrbitOptions o0 = opt.orbit;
   o0.samples = 0;
-  const OrbitResult first = find_forced_orbit(map0, x_guess, pm0.period, pm0.omega, o0);
+  const OrbitResult first =
+      pm0.autonomous ? find_autonomous_orbit(map0, x_guess, pm0.period,
+                                             2.0 * std::numbers::pi / pm0.period, pm0.pinned, o0)
+                     : find_forced_orbit(map0, x_guess, pm0.period, pm0.omega, o0);
   runs += first.runs;
   if (!first.converged())
     return done("start_failed", "the orbit at the first value: " + first.message);
@@ -688,7 +788,8 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
   {
     PointData p0;
     std::string why;
-    if (!make_point(family, lambda0, first.x0, opt, p0, why, runs))
+    if (!make_point(family, lambda0, first.x0, opt, p0, why, runs, nullptr, pm0.t0,
+                    pm0.autonomous ? first.period : std::numeric_limits<double>::quiet_NaN()))
       return done("start_failed", why);
     const int d = p0.chart->dim();
     if (p0.t(d) * opt.direction < 0) p0.t = -p0.t;
@@ -764,7 +865,7 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
                                               lambda, opt.lambda_min, opt.lambda_max));
     PointData next;
     if (!make_point(family, lambda, stacked_state(c.eval.run.samples.front()), opt, next, why, runs,
-                    &cur.p.signature, cur.p.t0))
+                    &cur.p.signature, cur.p.t0, c.T))
       return done("step_failed", why);
     if (!next.chart) {  // the events changed: the branch of smooth orbits ends here
       BranchSpecial s;
@@ -783,18 +884,12 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
     }
     // orientation: along the secant from the current point, in the new chart's coordinates
     const int dn = next.chart->dim();
-    Vec sec(dn + 1);
-    sec.head(dn) = -next.chart->coords(cur.p.x0);
-    sec(dn) = (lambda - cur.p.lambda) / opt.lambda_scale;
+    const Vec sec = pack(next, next.p.x0, next.p.period, lambda, opt.lambda_scale) -
+                    pack(next, cur.p.x0, cur.p.period, cur.p.lambda, opt.lambda_scale);
     if (next.t.dot(sec) < 0) next.t = -next.t;
     BranchPoint& p = next.p;
-    p.arclength = cur.p.arclength + (c.u -
-                                     [&] {
-                                       Vec u0 = Vec::Zero(d + 1);
-                                       u0(d) = cur.p.lambda / opt.lambda_scale;
-                                       return u0;
-                                     }())
-                                        .norm();
+    p.arclength = cur.p.arclength +
+                  (c.u - pack(cur, cur.p.x0, cur.p.period, cur.p.lambda, opt.lambda_scale)).norm();
     p.corrector_iterations = c.iterations;
     p.tangent_lambda = next.t(dn);
     p.runs = runs - runs_before;

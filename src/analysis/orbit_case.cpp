@@ -284,10 +284,8 @@ void write_orbit_files(const HeldFolder& folder, const CaseSpec& spec, const Cas
 }
 
 std::vector<CaseIssue> branch_issues(const CaseSpec& spec, const CaseBranchOptions& o) {
+  // a forced orbit (a prescribed constant spin) or an autonomous one (a free spin, --period)
   std::vector<CaseIssue> bad = orbit_issues(spec, o.orbit);
-  if (spec.loads().spin != SpinDrive::Prescribed)
-    bad.push_back({spec.source, 0, "loads.spin", std::string(to_string(spec.loads().spin)),
-                   "rubdyn branch follows forced orbits (a prescribed constant spin) only"});
   const std::string cl = "command line";
   bool numeric = false;
   for (const auto& e : case_values(spec))
@@ -321,18 +319,23 @@ CaseBranch find_case_branch(const std::string& text, const std::string& source,
   for (const auto& c : model->coordinates()) out.state_names.push_back(c.rate);
   const int k = o.orbit.periods;
   const std::atomic<bool>* stop = o.orbit.stop;
-  const ModelFamily family = [&text, &source, &overrides, key = o.key, k, stop](double lambda) {
+  const double T_guess = o.orbit.period * k;  // an autonomous orbit's (NaN: forced)
+  const ModelFamily family = [&text, &source, &overrides, key = o.key, k, stop,
+                              T_guess](double lambda) {
     std::vector<std::string> sets = overrides;
     sets.push_back(fmt::format("{}={}", key, lambda));
     const CaseSpec s = parse_case(text, source, sets);
-    if (auto bad = orbit_issues(s, CaseOrbitOptions{}); !bad.empty())
-      throw CaseError(std::move(bad));
+    CaseOrbitOptions oo;
+    oo.period = T_guess;
+    if (auto bad = orbit_issues(s, oo); !bad.empty()) throw CaseError(std::move(bad));
     ParameterModel pm;
     pm.model = build_model(s);
     const MechanicalState s0 = initial_state(s);
     pm.t0 = s0.t;
     pm.omega = std::abs(pm.model->spin(s0.t, s0.q, s0.v));
-    pm.period = 2.0 * std::numbers::pi * k / pm.omega;
+    pm.autonomous = s.loads().spin != SpinDrive::Prescribed;
+    if (pm.autonomous) pm.pinned = {pm.model->spin_coordinate()};
+    pm.period = pm.autonomous ? T_guess : 2.0 * std::numbers::pi * k / pm.omega;
     pm.options = event_driven_options(s);
     pm.options.stop = stop;
     return pm;
@@ -359,7 +362,7 @@ std::string branch_csv(const CaseBranch& b) {
   std::string s = "point,";
   s += b.key;
   s += ",arclength,period,amplitude,F_N_max,F_N_min,d_N_min,d_N_dip,free_time,impact_speed_min,"
-       "residual,stability,mu_max_abs";
+       "cone_min,residual,stability,mu_max_abs";
   for (std::size_t j = 1; j <= nm; ++j)
     s += fmt::format(",mu{0}_re,mu{0}_im,mu{0}_abs,mu{0}_error", j);
   s += ",corrector_iterations,runs,t0";  // t0: the section's time, where the state is
@@ -372,9 +375,9 @@ std::string branch_csv(const CaseBranch& b) {
   for (std::size_t i = 0; i < b.branch.points.size(); ++i) {
     const BranchPoint& p = b.branch.points[i];
     const auto& F = p.floquet.multipliers;
-    fmt::format_to(out, "{},{},{},{},{},{},{},{},{},{},{},{},{},{}", i, p.lambda, p.arclength,
+    fmt::format_to(out, "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}", i, p.lambda, p.arclength,
                    p.period, p.amplitude, p.F_N_max, p.F_N_min, p.d_N_min, p.d_N_dip, p.free_time,
-                   p.impact_speed_min, p.residual, to_string(p.floquet.stability),
+                   p.impact_speed_min, p.cone_min, p.residual, to_string(p.floquet.stability),
                    F.empty() ? 0.0 : std::abs(F.front().value));
     for (std::size_t j = 0; j < nm; ++j) {
       if (j < F.size())

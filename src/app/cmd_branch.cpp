@@ -1,6 +1,6 @@
-// rubdyn branch CASE --vary KEY: a branch of forced periodic orbits followed in a case key by
-// pseudo-arclength continuation, with folds, period doublings and Neimark-Sacker points located
-// (analysis/continuation.hpp, docs/orbits.md section 10), written to an output folder.
+// rubdyn branch CASE --vary KEY: a branch of periodic orbits (forced, or autonomous with --period)
+// followed in a case key by pseudo-arclength continuation, with folds, period doublings and
+// Neimark-Sacker points located (analysis/continuation.hpp, docs/orbits.md section 10).
 #include <fmt/format.h>
 
 #include <cmath>
@@ -97,7 +97,8 @@ void add_branch_command(CLI::App& app, Action& action) {
   auto a = std::make_shared<BranchArgs>();
   auto* sub = app.add_subcommand(
       "branch",
-      "Follow a case's forced periodic orbit in a case key (pseudo-arclength continuation), "
+      "Follow a case's periodic orbit (forced; or autonomous, a free spin with --period) in a "
+      "case key (pseudo-arclength continuation), "
       "locating folds, period doublings and Neimark-Sacker points (docs/orbits.md)");
   add_case_options(*sub, a->c);
   sub->add_option("--vary", a->key, "the case key to follow the orbit in, e.g. initial.omega0")
@@ -110,6 +111,9 @@ void add_branch_command(CLI::App& app, Action& action) {
   sub->add_option("--scale", a->o.scale,
                   "the key's unit in the arclength (default: 1 % of its value in the case)");
   sub->add_option("--periods", a->o.orbit.periods, "k: the orbits' period is 2 pi k / omega0");
+  sub->add_option("--period", a->o.orbit.period,
+                  "a free spin's orbits (loads.spin = \"torque\", autonomous): the guess of the "
+                  "first one's period [s]");
   sub->add_option("--tol", a->o.orbit.orbit.tol, "Newton's and the corrector's tolerance");
   sub->add_option("--out", a->out, "output folder (default: the case's output folder + -branch)");
   sub->add_option("--from", a->from, "start from the last complete sample of this output folder");

@@ -26,7 +26,7 @@ import closed_forms as cf  # noqa: E402
 import reference_sim as rs  # noqa: E402
 import rubdyn_runs as rr  # noqa: E402
 from common import machine  # noqa: E402
-from test_closed_forms import BLACK_ROLL, OMEGA_U, UNB, UNB_SPRUNG  # noqa: E402
+from test_closed_forms import BLACK_ROLL, K_direct, OMEGA_U, UNB, UNB_SPRUNG  # noqa: E402
 
 
 def orbit(cli, case, sets, out, rtol, atol, extra=()):
@@ -151,6 +151,35 @@ def main():
                         or not triv["is_one"]):
                     print(f"MISMATCH black {which} rtol {rtol}", file=sys.stderr)
                     worst_ratio = max(worst_ratio, 2.0)
+        # the low rolling orbit continued down in the torque (an autonomous branch): its end,
+        # where the stick breaks, against the closed form's slip onset: |F_T| = tau / R reaches
+        # mu F_N, F_N = g0 |Re K(w)|, i.e. -Im K(w) = mu |Re K(w)|, tau = -R g0 Im K(w)
+        low = roots[0]
+        keys = cf.contact_orbit_state(P, low["w"], low["Omega"])
+        Tw = 2 * math.pi / abs(low["w"])
+        bfolder = os.path.join(tmp, "black_branch")
+        cmd = [a.cli, "branch", case_b, "--vary", "loads.torque", "--period", repr(1.01 * Tw),
+               "--points", "40", "--down", "--out", bfolder]
+        for x in rr.initial_sets(keys):
+            cmd += ["--set", x]
+        p = subprocess.run(cmd, capture_output=True, text=True)
+        if p.returncode not in (0, 3):
+            raise SystemExit(f"{' '.join(cmd)}: exit {p.returncode}\n{p.stderr}")
+        with open(os.path.join(bfolder, "branch.json")) as f:
+            bj = json.load(f)
+        R, g0b, mu = P["rotor.radius"], P["stator.gap"], P["contact.mu"]
+        h = lambda w: -K_direct(P, w).imag - mu * abs(K_direct(P, w).real)  # noqa: E731
+        w = low["w"]
+        for _ in range(60):
+            dq = 1e-7 * abs(w)
+            w -= h(w) / ((h(w + dq) - h(w - dq)) / (2 * dq))
+        tau_c = -R * g0b * K_direct(P, w).imag
+        end = bj["specials"][-1] if bj["specials"] else None
+        slip_ok = (end is not None and "slip onset" in end["how"]
+                   and abs(end["value"] - tau_c) <= end["spread"] + 1e-4)
+        if not slip_ok:
+            print(f"MISMATCH black branch end: {end} against {tau_c}", file=sys.stderr)
+            worst_ratio = max(worst_ratio, 2.0)
         # a start off the orbit: cases/full-rub.toml (the sprung ring's larger root) with x_r
         # moved 0.57 g0 inwards (a free start, an impact, then sliding)
         full = os.path.join(ROOT, "cases", "full-rub.toml")
@@ -201,6 +230,14 @@ def main():
     ]
     lines += ["| " + " | ".join(r) + " |" for r in black]
     lines += [""]
+    lines += [
+        "Black's low rolling orbit continued down in the torque as a branch of autonomous "
+        "orbits (`rubdyn branch CASE --vary loads.torque --period T0 --down`, docs/orbits.md "
+        f"section 10): {bj['points']} points, outcome `{bj['outcome']}`; the stick breaks into "
+        f"slip at {end['value']:.7f} N m (located from the friction cone's margin, estimates "
+        f"{end['spread']:.1e} apart) against the closed form's {tau_c:.7f} N m "
+        "(-Im K(w) = mu |Re K(w)|): "
+        f"{abs(end['value'] - tau_c):.1e} N m apart.", ""]
     its = [h["jacobian"] for h in off["newton"]]
     lines += [
         "A start off the orbit: `rubdyn orbit cases/full-rub.toml --set initial.x_r=0.0003` "

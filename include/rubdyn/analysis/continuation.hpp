@@ -34,6 +34,12 @@ struct ParameterModel {
   double period = 0.0;  ///< T(lambda)
   double omega = 0.0;   ///< the state scale's frequency (the spin speed)
   EventDrivenOptions options;
+  /// An autonomous orbit (a free spin under a torque law): its period is an unknown of the
+  /// branch (`period`: the first point's guess), the section a hyperplane through each point
+  /// across the flow (the phase condition), the components `pinned` (the cyclic spin angle)
+  /// held; the state's velocities scaled by 2 pi / T instead of omega.
+  bool autonomous = false;
+  std::vector<int> pinned;
 };
 /// lambda -> the model there; throws (e.g. CaseError) for a value the model refuses.
 using ModelFamily = std::function<ParameterModel(double lambda)>;
@@ -73,6 +79,9 @@ struct BranchPoint {
   /// (a strict local minimum of the sampled gap, refined by the parabola through it and its
   /// neighbours): where it reaches 0 a new contact appears (grazing) [m]; NaN: none
   double d_N_dip = std::numeric_limits<double>::quiet_NaN();
+  /// contact 1's smallest friction cone margin mu F_N - |F_T| over the samples where it sticks
+  /// [N]: where it reaches 0 the stick breaks into slip; NaN: it never sticks
+  double cone_min = std::numeric_limits<double>::quiet_NaN();
   /// the slowest impact's closing speed over the period, |v_N-| [m/s]; NaN: no impact
   double impact_speed_min = std::numeric_limits<double>::quiet_NaN();
   long runs = 0;  ///< runs of the return map for this point
@@ -114,7 +123,8 @@ struct Branch {
   std::vector<SectionMove> section_moves;
 };
 
-/// Follows the forced orbit from the guess x_guess at lambda0 (Newton there first).
+/// Follows the orbit from the guess x_guess at lambda0 (Newton there first): a forced orbit, or an
+/// autonomous one where the family says so (ParameterModel::autonomous: its period an unknown).
 Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_guess,
                              const ContinuationOptions& opt);
 
