@@ -91,7 +91,7 @@ struct BranchPoint {
 
 /// A special point between two points of the branch.
 struct BranchSpecial {
-  std::string kind;     ///< "fold", "period_doubling", "neimark_sacker", "events_change"
+  std::string kind;     ///< "fold", "period_doubling", "neimark_sacker", "events_change", "end"
   int after = 0;        ///< between points `after` and `after + 1` (or beyond the last, `after`)
   double lambda = 0.0;  ///< located
   /// The located value's spread between two estimates (a lift-off's secant and parabola, see
