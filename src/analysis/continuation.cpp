@@ -136,6 +136,21 @@ Eval evaluate(const ModelFamily& family, const SectionChart& chart, VecIn xi, do
   return e;
 }
 
+/// The minimum of the parabola through three equally spaced values y0, y1, y2 that have a strict
+/// minimum at y1 (NaN when they do not): the refinement of a sampled minimum, exact to O(dt^4)
+/// where the samples are O(dt^2) off.
+double parabola_minimum(double y0, double y1, double y2) {
+  const double curv = y0 - 2.0 * y1 + y2;
+  if (!(y0 > y1 && y2 > y1 && curv > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+  return y1 - (y2 - y0) * (y2 - y0) / (8.0 * curv);
+}
+
+/// The state scale of a point's orbit: velocities per the spin speed (forced), per the orbit's
+/// own frequency 2 pi / T (autonomous, as find_case_orbit does).
+Vec point_scale(const ParameterModel& pm, double period) {
+  return state_scale(*pm.model, pm.autonomous ? 2.0 * std::numbers::pi / period : pm.omega);
+}
+
 /// Contact 1's smallest gap over a sampled period (samples on a uniform grid from t0 to t0 + T,
 /// the last the first's state again; both sides of an event where there are events): the
 /// smallest sample's gap, refined where it is a strict local minimum between its grid
@@ -159,10 +174,8 @@ double smallest_gap(const std::vector<Sample>& s) {
     return std::abs(d - dt) <= 1e-9 * std::abs(dt);
   };
   if (!grid(prev, i) || !grid(i, next)) return y1;  // (an event's rows: not a grid)
-  const double y0 = s[prev].contacts[0].d_N, y2 = s[next].contacts[0].d_N;
-  const double curv = y0 - 2.0 * y1 + y2;
-  if (!(y0 > y1 && y2 > y1 && curv > 0.0)) return y1;
-  return y1 - (y2 - y0) * (y2 - y0) / (8.0 * curv);
+  const double v = parabola_minimum(s[prev].contacts[0].d_N, y1, s[next].contacts[0].d_N);
+  return std::isnan(v) ? y1 : v;
 }
 
 /// Contact 1's smallest strict local minimum of the gap at a sample of a free stretch (both
@@ -177,11 +190,8 @@ double gap_dip(const std::vector<Sample>& s) {
     if (a.contacts[0].phase != Phase::Free || m.contacts[0].phase != Phase::Free ||
         b.contacts[0].phase != Phase::Free)
       continue;
-    const double y0 = a.contacts[0].d_N, y1 = m.contacts[0].d_N, y2 = b.contacts[0].d_N;
-    const double curv = y0 - 2.0 * y1 + y2;
-    if (!(y0 > y1 && y2 > y1 && curv > 0.0)) continue;
-    const double v = y1 - (y2 - y0) * (y2 - y0) / (8.0 * curv);
-    if (!(v >= best)) best = v;
+    const double v = parabola_minimum(a.contacts[0].d_N, m.contacts[0].d_N, b.contacts[0].d_N);
+    if (!std::isnan(v) && !(v >= best)) best = v;
   }
   return best;
 }
@@ -247,8 +257,7 @@ bool make_point(const ModelFamily& family, double lambda, VecIn x, const Continu
     out.chart.reset();
     return true;
   }
-  // an autonomous orbit's velocities scaled by its own frequency (as find_case_orbit does)
-  const Vec D = state_scale(*pm.model, pm.autonomous ? 2.0 * std::numbers::pi / period : pm.omega);
+  const Vec D = point_scale(pm, period);
   out.chart = std::make_unique<SectionChart>(*pm.model, t0, xs, start_phases(run), D,
                                              pm.autonomous ? pm.pinned : std::vector<int>{});
   const SectionChart& chart = *out.chart;
@@ -690,10 +699,9 @@ Located locate_crossing(const ModelFamily& family, const PointData& from, double
     const double period = std::isnan(c.T) ? pm.period : c.T;
     const PeriodMap map(*pm.model, from.p.t0, pm.options);
     const Vec xs = stacked_state(c.eval.run.samples.front());
-    const SectionChart chart(
-        *pm.model, from.p.t0, xs, start_phases(c.eval.run),
-        state_scale(*pm.model, pm.autonomous ? 2.0 * std::numbers::pi / period : pm.omega),
-        pm.autonomous ? pm.pinned : std::vector<int>{});
+    const SectionChart chart(*pm.model, from.p.t0, xs, start_phases(c.eval.run),
+                             point_scale(pm, period),
+                             pm.autonomous ? pm.pinned : std::vector<int>{});
     const long r0 = map.runs();
     const Vec zero = Vec::Zero(chart.dim());
     const Monodromy m =

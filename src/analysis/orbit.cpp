@@ -110,12 +110,6 @@ FlowRun PeriodMap::run(VecIn x, double T, double output_dt) const {
   return r;
 }
 
-Vec stacked_state(const Sample& s) {
-  Vec x(s.q.size() + s.v.size());
-  x << s.q, s.v;
-  return x;
-}
-
 std::vector<Phase> start_phases(const FlowRun& r) {
   std::vector<Phase> p;
   if (r.samples.empty()) return p;

@@ -36,12 +36,6 @@ using detail::PhaseEval;
 // cube root of eps balances the two.
 constexpr double kVariationalStep = 6e-6;
 
-Vec stacked_state(const Sample& s) {
-  Vec x(s.q.size() + s.v.size());
-  x << s.q, s.v;
-  return x;
-}
-
 Modes modes_of(const Sample& s) {
   Modes m;
   m.K = static_cast<int>(s.contacts.size());
@@ -53,8 +47,7 @@ Modes modes_of(const Sample& s) {
 class Variational {
  public:
   Variational(const LagrangianModel& m, VecIn D, int d, double rtol, double atol_q)
-      : m_(m),
-        n_(m.num_dofs()),
+      : n_(m.num_dofs()),
         N_(2 * n_),
         d_(d),
         eval_(m, m.contact_count()),
@@ -196,7 +189,6 @@ class Variational {
     return 0;
   }
 
-  const LagrangianModel& m_;
   const int n_, N_, d_;
   PhaseEval eval_;
   std::vector<ContactLaw> laws_;
@@ -238,11 +230,7 @@ struct EventWitness {
 class SaltationBuilder {
  public:
   SaltationBuilder(const LagrangianModel& m, const EventDrivenOptions& opt, VecIn D, double F_ref)
-      : m_(m),
-        n_(m.num_dofs()),
-        D_(D),
-        ctx_(m, opt.rtol, opt.atol, opt.omega_lim),
-        decider_(m, ctx_) {
+      : n_(m.num_dofs()), D_(D), ctx_(m, opt.rtol, opt.atol, opt.omega_lim), decider_(m, ctx_) {
     ctx_.F_ref = F_ref;
   }
 
@@ -355,7 +343,6 @@ class SaltationBuilder {
     out.tail(n_) = tr.v;
     return true;
   }
-  const LagrangianModel& m_;
   const int n_;
   Vec D_;
   PhaseContext ctx_;

@@ -231,15 +231,17 @@ ModelFamily speed_family_at(const std::string& text, double t_s, double theta_s)
   };
 }
 
-/// The orbit at omega from a guess at the section t_s, with its monodromy from sensitivities.
-OrbitResult orbit_at(const ModelFamily& family, double omega, VecIn guess) {
+/// The orbit of `periods` forcing periods at omega from a guess at the section t_s, with its
+/// monodromy (and Newton's Jacobians) from sensitivities, `samples` samples a period.
+OrbitResult orbit_at(const ModelFamily& family, double omega, VecIn guess, int periods = 1,
+                     int samples = 2000) {
   static const SensitivityMonodromy sens;
   const ParameterModel pm = family(omega);
   const PeriodMap map(*pm.model, pm.t0, pm.options);
   OrbitOptions o;
   o.provider = &sens;
-  o.samples = 2000;
-  return find_forced_orbit(map, guess, pm.period, pm.omega, o);
+  o.samples = samples;
+  return find_forced_orbit(map, guess, periods * pm.period, pm.omega, o);
 }
 
 }  // namespace
@@ -372,13 +374,8 @@ TEST_CASE(
     const double w = pd->lambda - below[k];
     const ParameterModel pm = family(w);
     const PeriodMap map(*pm.model, pm.t0, pm.options);
-    static const SensitivityMonodromy sens;
-    OrbitOptions oo;
-    oo.provider = &sens;
-    oo.samples = 0;
     const Vec D = state_scale(*pm.model, pm.omega);
-    const Vec guess = pd->x + 0.05 * pd->direction;
-    const OrbitResult r2 = find_forced_orbit(map, guess, 2.0 * pm.period, pm.omega, oo);
+    const OrbitResult r2 = orbit_at(family, w, Vec(pd->x + 0.05 * pd->direction), 2, 0);
     INFO("period 2 at " << w << ": " << r2.message << "; " << r2.floquet.reason);
     REQUIRE(r2.converged());
     const FlowRun one = map.run(r2.x0, pm.period);
@@ -388,7 +385,7 @@ TEST_CASE(
     split[k] = ((stacked_state(one.samples.back()) - r2.x0).array() / D.array()).abs().maxCoeff();
     mu2[k] = std::abs(r2.floquet.multipliers.front().value);
     INFO("split " << split[k] << ", largest multiplier " << mu2[k]);
-    CHECK(split[k] > 1e4 * oo.tol);
+    CHECK(split[k] > 1e4 * OrbitOptions{}.tol);
     CHECK(r2.events.size() == 2);
     CHECK(r2.floquet.stability == Stability::Stable);
   }

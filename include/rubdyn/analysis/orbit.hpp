@@ -84,9 +84,6 @@ class PeriodMap {
   mutable std::atomic<long> runs_{0};
 };
 
-/// A sample's state as one vector (q, v).
-Vec stacked_state(const Sample& s);
-
 /// The phase of every contact at the start of a run (the phase the integrator chose there).
 std::vector<Phase> start_phases(const FlowRun& r);
 /// ... and at its end.

@@ -112,6 +112,13 @@ struct Sample {
   Vec observables;  ///< the model's observables (LagrangianModel::observables), in its order
 };
 
+/// A sample's state as one vector (q, v).
+inline Vec stacked_state(const Sample& s) {
+  Vec x(s.q.size() + s.v.size());
+  x << s.q, s.v;
+  return x;
+}
+
 /// One logged event.
 struct EventRecord {
   double t = 0.0;
