@@ -196,6 +196,15 @@ double gap_dip(const std::vector<Sample>& s) {
   return best;
 }
 
+/// The monodromy at the chart's origin: the options' provider (the flow's sensitivities), or the
+/// finite differences at the options' steps.
+Monodromy point_monodromy(const ContinuationOptions& opt, const PeriodMap& map, double period,
+                          const SectionChart& chart, const FlowRun& run) {
+  const Vec zero = Vec::Zero(chart.dim());
+  if (opt.orbit.provider) return opt.orbit.provider->compute(map, period, chart, zero, run);
+  return FiniteDifferenceMonodromy(opt.orbit.fd_steps).compute(map, period, chart, zero, run);
+}
+
 /// Everything about the orbit through x at lambda (x on its section's constraints), its section
 /// at the time t0 (NaN: the family's).
 bool make_point(const ModelFamily& family, double lambda, VecIn x, const ContinuationOptions& opt,
@@ -284,11 +293,13 @@ bool make_point(const ModelFamily& family, double lambda, VecIn x, const Continu
   }
   const FiniteDifferenceMonodromy fd(opt.orbit.fd_steps);
   const long runs_before = map.runs();
-  Monodromy m = fd.compute(map, period, chart, zero, run);
+  Monodromy m = point_monodromy(opt, map, period, chart, run);
   const Mat tangent = chart.tangent(zero);
   FloquetAnalysis fl = floquet_analysis(m, tangent, D, pm.autonomous);
-  for (int k = 0; k < opt.orbit.fd_refinements && fl.stability == Stability::Undecided &&
-                  fd.refine(map, period, chart, zero, run, m);
+  // (the finite differences' refinements: the sensitivities' error is the integration's)
+  for (int k = 0;
+       !opt.orbit.provider && k < opt.orbit.fd_refinements &&
+       fl.stability == Stability::Undecided && fd.refine(map, period, chart, zero, run, m);
        ++k)
     fl = floquet_analysis(m, tangent, D, pm.autonomous);
   runs += map.runs() - runs_before;
@@ -704,8 +715,7 @@ Located locate_crossing(const ModelFamily& family, const PointData& from, double
                              pm.autonomous ? pm.pinned : std::vector<int>{});
     const long r0 = map.runs();
     const Vec zero = Vec::Zero(chart.dim());
-    const Monodromy m =
-        FiniteDifferenceMonodromy(opt.orbit.fd_steps).compute(map, period, chart, zero, c.eval.run);
+    const Monodromy m = point_monodromy(opt, map, period, chart, c.eval.run);
     runs += map.runs() - r0;
     if (!m.ok || m.sequence_changed) return false;
     val = g(m.M);

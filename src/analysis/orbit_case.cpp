@@ -312,6 +312,8 @@ CaseBranch find_case_branch(const std::string& text, const std::string& source,
   if (auto bad = branch_issues(spec, o); !bad.empty()) throw CaseError(std::move(bad));
   CaseBranch out;
   out.key = o.key;
+  out.periods = o.orbit.periods;
+  out.monodromy = o.orbit.orbit.provider ? o.orbit.orbit.provider->name() : "finite differences";
   for (const auto& e : case_values(spec))
     if (e.full() == o.key) out.lambda0 = std::get<double>(e.value);
   const auto model = build_model(spec);
@@ -400,9 +402,10 @@ std::string branch_json(const CaseBranch& b) {
   std::string s;
   auto out = std::back_inserter(s);
   fmt::format_to(out,
-                 "{{\n  \"key\": {},\n  \"from\": {},\n  \"outcome\": {},\n  \"message\": {},\n"
-                 "  \"points\": {},\n  \"specials\": [",
-                 str(b.key), num(b.lambda0), str(r.outcome), str(r.message), r.points.size());
+                 "{{\n  \"key\": {},\n  \"from\": {},\n  \"periods\": {},\n  \"monodromy\": {},\n"
+                 "  \"outcome\": {},\n  \"message\": {},\n  \"points\": {},\n  \"specials\": [",
+                 str(b.key), num(b.lambda0), b.periods, str(b.monodromy), str(r.outcome),
+                 str(r.message), r.points.size());
   for (std::size_t i = 0; i < r.specials.size(); ++i) {
     const auto& x = r.specials[i];
     fmt::format_to(out,

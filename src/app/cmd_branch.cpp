@@ -31,6 +31,7 @@ struct BranchArgs {
   std::optional<std::string> out, from, at, rtol, atol;
   std::optional<double> to;
   bool down = false;
+  std::string monodromy = "differences";
   CaseBranchOptions o;
 };
 
@@ -54,6 +55,8 @@ int branch_command(BranchArgs& a) {
   a.o.key = a.key;
   a.o.to = a.to.value_or(std::numeric_limits<double>::quiet_NaN());
   a.o.direction = a.down ? -1 : +1;
+  static const SensitivityMonodromy sensitivities;
+  if (a.monodromy == "sensitivities") a.o.orbit.orbit.provider = &sensitivities;
   if (bad.empty()) {
     const auto more = branch_issues(spec, a.o);
     bad.insert(bad.end(), more.begin(), more.end());
@@ -115,6 +118,10 @@ void add_branch_command(CLI::App& app, Action& action) {
                   "a free spin's orbits (loads.spin = \"torque\", autonomous): the guess of the "
                   "first one's period [s]");
   sub->add_option("--tol", a->o.orbit.orbit.tol, "Newton's and the corrector's tolerance");
+  sub->add_option("--monodromy", a->monodromy,
+                  "every point's monodromy (its multipliers, the corrector's Jacobian) from finite "
+                  "differences of the return map (default) or from the flow's sensitivities")
+      ->check(CLI::IsMember({"differences", "sensitivities"}));
   sub->add_option("--out", a->out, "output folder (default: the case's output folder + -branch)");
   sub->add_option("--from", a->from, "start from the last complete sample of this output folder");
   sub->add_option("--at", a->at, "with --from: start from the sample at this time [s]");

@@ -358,6 +358,23 @@ TEST_CASE(
   const double zero = pd->lambda - off + 2 * off * g[0] / (g[0] - g[1]);
   INFO("the sensitivities' zero " << std::setprecision(12) << zero << ", the located "
                                   << pd->lambda);
+  {
+    // the same branch with every point's monodromy from the sensitivities: its period doubling
+    // is located on their det(Phi + I), whose error (the monodromy's, ~1e-6) over the slope 0.39
+    // per rad/s is ~3e-6 rad/s, as is the zero's above: bound 2e-5 rad/s (measured 1e-8)
+    static const SensitivityMonodromy sensitivities;
+    ContinuationOptions so = opt;
+    so.orbit.provider = &sensitivities;
+    const Branch ds = continue_forced_orbit(family, p.Omega, co.result.x0, so);
+    INFO("down, sensitivities: " << ds.outcome << ": " << ds.message);
+    const BranchSpecial* pds = nullptr;
+    for (const auto& s : ds.specials)
+      if (s.kind == "period_doubling") pds = &s;
+    REQUIRE(pds != nullptr);
+    INFO("located there at " << std::setprecision(12) << pds->lambda << " +- " << pds->spread);
+    CHECK(std::abs(pds->lambda - zero) <= 2e-5);
+    CHECK(ds.points[1].monodromy.method.rfind("sensitivities", 0) == 0);
+  }
   // The continuation's regula falsi evaluates det(Phi + I) with finite-difference monodromies
   // (error ~1e-4 near there) on a slope of 0.39 per rad/s: a bound of 3e-4 rad/s; measured
   // 3.8e-7 from the sensitivities' zero (whose own error, ~1e-6 / 0.39, is below that)

@@ -11,7 +11,8 @@
 //   predictor  u_p = u_i + ds t_i (t_i the unit tangent: the null vector of [Phi - I, G_lambda]),
 //   corrector  Newton on (G(u), t_i . (u - u_p)) = 0 from the Jacobian of point i, with
 //              Broyden's updates,
-// then the new point's monodromy (finite differences with their error) and G_lambda (central
+// then the new point's monodromy (finite differences with their error, or the options'
+// provider: the flow's sensitivities) and G_lambda (central
 // differences in lambda) give its tangent, oriented along the secant from the previous point.
 // The step ds grows by 1.3 when the corrector converges in 4 iterations or fewer (from a
 // finite-difference Jacobian whose error is ~1e-3, Broyden's iteration gains about two digits

@@ -92,6 +92,8 @@ std::vector<CaseIssue> branch_issues(const CaseSpec& spec, const CaseBranchOptio
 struct CaseBranch {
   std::string key;
   double lambda0 = 0.0;
+  int periods = 1;                       ///< k: the orbits' period is 2 pi k / omega (forced)
+  std::string monodromy;                 ///< how the points' monodromies were computed
   std::vector<std::string> state_names;  ///< the orbit state's coordinates and rates
   Branch branch;
 };
