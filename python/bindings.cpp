@@ -223,11 +223,17 @@ py::tuple run_case(const Case& c, const py::object& progress, double progress_in
 
 /// rubdyn.branch: the case's forced orbit followed in a case key (analysis/orbit_case.hpp,
 /// find_case_branch), the case re-read from its text with its overrides and key = value at every
-/// value, on a worker thread as orbit_case (Ctrl-C ends the running run). Returns (branch.json's
-/// text, branch.csv's text, the CLI's exit code). CaseError for bad input, as the CLI's exit 2.
+/// value, on a worker thread as orbit_case (Ctrl-C ends the running run). `earlier`: an earlier
+/// branch's (branch.json, branch.csv, case.resolved.toml) texts, resumed (`resume`) or switched
+/// from (`special`, `switch_offset`, `switch_eps`), of the same case (its resolved TOML) as the
+/// CLI asks. Returns (branch.json's text, branch.csv's text, the CLI's exit code, the case's
+/// resolved TOML). CaseError for bad input, as the CLI's exit 2.
 py::tuple branch_case(const Case& c, const std::string& key, double to, int points, double ds,
-                      double ds_max, double scale, bool down, double tol, int max_iter,
-                      int samples) {
+                      double ds_max, double scale, bool down, double tol, int max_iter, int samples,
+                      int periods, double period, bool sensitivities,
+                      const std::optional<py::tuple>& earlier, bool resume, int special,
+                      double switch_offset, double switch_eps) {
+  static const SensitivityMonodromy sens;
   CaseBranchOptions o;
   o.key = key;
   o.to = to;
@@ -239,6 +245,24 @@ py::tuple branch_case(const Case& c, const std::string& key, double to, int poin
   o.orbit.orbit.tol = tol;
   o.orbit.orbit.max_iterations = max_iter;
   o.orbit.orbit.samples = samples;
+  o.orbit.periods = periods;
+  o.orbit.period = period;
+  if (sensitivities) o.orbit.orbit.provider = &sens;
+  o.special = special;
+  o.switch_offset = switch_offset;
+  o.switch_eps = switch_eps;
+  const std::string resolved = to_toml(c.spec);
+  std::optional<CaseBranch> old;
+  if (earlier) {
+    const std::string what = resume ? "resume" : "switch";
+    if ((*earlier)[2].cast<std::string>() != resolved)
+      throw CaseError({{"rubdyn.branch", 0, what, "",
+                        "the earlier branch is of another case or other settings (its resolved "
+                        "case differs from this call's, with its overrides and tolerances)"}});
+    old = read_case_branch((*earlier)[0].cast<std::string>(), (*earlier)[1].cast<std::string>(),
+                           "<rubdyn.Branch>");
+    (resume ? o.resume : o.switch_from) = &*old;
+  }
   if (auto bad = branch_issues(c.spec, o); !bad.empty()) throw CaseError(std::move(bad));
   std::atomic<bool> stop{false};
   o.orbit.stop = &stop;
@@ -248,7 +272,7 @@ py::tuple branch_case(const Case& c, const std::string& key, double to, int poin
                              o);
       }))
     raise_keyboard_interrupt();
-  return py::make_tuple(branch_json(b), branch_csv(b), exit_code(b));
+  return py::make_tuple(branch_json(b), branch_csv(b), exit_code(b), resolved);
 }
 
 /// rubdyn.orbit: the case's forced orbit (analysis/orbit_case.hpp), searched on a worker thread
@@ -610,8 +634,13 @@ PYBIND11_MODULE(_core, m) {
         "(orbit_json, columns, events, summary_json, monodromy, exit_code) of `rubdyn orbit`");
   m.def("branch", &branch_case, py::arg("case"), py::arg("key"), py::arg("to"), py::arg("points"),
         py::arg("ds"), py::arg("ds_max"), py::arg("scale"), py::arg("down"), py::arg("tol"),
-        py::arg("max_iter"), py::arg("samples"),
-        "(branch_json, branch_csv, exit_code) of `rubdyn branch`");
+        py::arg("max_iter"), py::arg("samples"), py::arg("periods") = 1,
+        py::arg("period") = std::numeric_limits<double>::quiet_NaN(),
+        py::arg("sensitivities") = false, py::arg("earlier") = py::none(),
+        py::arg("resume") = false, py::arg("special") = -1,
+        py::arg("switch_offset") = std::numeric_limits<double>::quiet_NaN(),
+        py::arg("switch_eps") = 0.05,
+        "(branch_json, branch_csv, exit_code, resolved_case) of `rubdyn branch`");
 
   m.def(
       "campbell",

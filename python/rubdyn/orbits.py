@@ -123,10 +123,12 @@ class Branch(dict):
         br.exit_code      what the CLI would exit with (0, 3, 4)
     """
 
-    def __init__(self, data, table, exit_code):
+    def __init__(self, data, table, exit_code, texts=None):
         super().__init__(data)
         self.table = table
         self.exit_code = exit_code
+        # (branch.json, branch.csv, the resolved case): what branch(resume=, switch=) reads back
+        self._texts = texts
 
     @property
     def values(self):
@@ -159,15 +161,25 @@ def _branch_table(text):
 
 
 def branch(case, vary, to=None, points=200, ds=0.5, ds_max=3.0, scale=None, down=False, tol=1e-8,
-           max_iter=20, samples=200, rtol=None, atol=None, overrides=None):
+           max_iter=20, samples=200, rtol=None, atol=None, overrides=None, periods=1, period=None,
+           monodromy="differences", resume=None, switch=None, special=None, switch_offset=None,
+           switch_eps=0.05):
     """The case's forced orbit followed in the case key `vary` (e.g. "initial.omega0"), as
     `rubdyn branch CASE --vary KEY` follows it (the same C++ continuation, branch.json and
     branch.csv), returned as a Branch; nothing is written.
 
     to: stop beyond this value. points: points on the branch, the first included. ds, ds_max:
     the first and the largest arclength step. scale: the key's unit in the arclength (None: 1 %
-    of its value). down: the first step decreases the key. tol, max_iter, samples: as orbit().
-    Bad input raises rubdyn.CaseError, as the CLI exits 2."""
+    of its value). down: the first step decreases the key. tol, max_iter, samples, periods,
+    period (a free spin's autonomous orbits: the first one's period guess [s]) and monodromy
+    ("differences" or "sensitivities"): as orbit(). resume: a Branch of this call's case and
+    settings, continued from its last point to `points` in all (returned as it is when it has
+    ended or has its points), as --resume. switch: a Branch of this case with a period doubling:
+    the branch of twice its period that leaves it (special: the doubling's index among its
+    specials, None: the first; switch_offset: the first orbit's distance from it in the key,
+    None: tried from half the distance of the points around it; switch_eps: the step along the
+    multiplier -1's direction), as --switch. Bad input raises rubdyn.CaseError, as the CLI
+    exits 2."""
     from . import _finite
     case = _case_with(case, overrides, rtol, atol, "branch")
     if not isinstance(vary, str):
@@ -175,10 +187,25 @@ def branch(case, vary, to=None, points=200, ds=0.5, ds_max=3.0, scale=None, down
     tol = _finite(tol, "branch: tol")
     if not tol > 0:
         raise ValueError(f"branch: tol = {tol}: must be > 0")
-    text, csv_text, code = _core.branch(
+    if monodromy not in ("differences", "sensitivities"):
+        raise ValueError(f"branch: monodromy = {monodromy!r}: must be \"differences\" or "
+                         "\"sensitivities\"")
+    if resume is not None and switch is not None:
+        raise ValueError("branch: resume and switch: one or the other")
+    earlier = resume if resume is not None else switch
+    if earlier is not None and (not isinstance(earlier, Branch) or earlier._texts is None):
+        raise TypeError("branch: resume and switch take a Branch that rubdyn.branch returned")
+    if switch is None and (special is not None or switch_offset is not None):
+        raise ValueError("branch: special and switch_offset need switch")
+    text, csv_text, code, resolved = _core.branch(
         case, vary, float("nan") if to is None else _finite(to, "branch: to"),
         _count(points, "points", 1, "branch"), _finite(ds, "branch: ds"),
         _finite(ds_max, "branch: ds_max"), 0.0 if scale is None else _finite(scale, "branch: scale"),
         bool(down), tol, _count(max_iter, "max_iter", 1, "branch"),
-        _count(samples, "samples", 1, "branch"))
-    return Branch(json.loads(text), _branch_table(csv_text), code)
+        _count(samples, "samples", 1, "branch"), _count(periods, "periods", 1, "branch"),
+        float("nan") if period is None else _finite(period, "branch: period"),
+        monodromy == "sensitivities", None if earlier is None else earlier._texts,
+        resume is not None, -1 if special is None else _count(special, "special", 0, "branch"),
+        float("nan") if switch_offset is None else _finite(switch_offset, "branch: switch_offset"),
+        _finite(switch_eps, "branch: switch_eps"))
+    return Branch(json.loads(text), _branch_table(csv_text), code, (text, csv_text, resolved))

@@ -76,21 +76,15 @@ def test_orbit_that_does_not_converge_says_so():
     assert len(orb["newton"]) == 3 and len(orb.run) > 100
 
 
-def test_branch_is_the_cli_branch(cli, tmp_path):
-    """rubdyn.branch: the same continuation, branch.json and branch.csv as `rubdyn branch`."""
-    out = tmp_path / "b"
-    p = run_cli(cli, "branch", FULL_RUB, "--vary", "initial.omega0", "--points", "4", "--out",
-                str(out))
-    assert p.returncode == 0, p.stderr
+def assert_cli_branch(br, out):
+    """The Branch is the CLI's folder `out`: branch.json but for the wall clock, and branch.csv
+    column by column, bit for bit (the CLI writes shortest round-trip digits)."""
     with open(out / "branch.json") as f:
         from_cli = json.load(f)
-    br = rubdyn.branch(FULL_RUB, "initial.omega0", points=4)
-    assert br.exit_code == 0 and br["outcome"] == "max_points" and br["points"] == 4
     a, b = dict(br), from_cli
     a.pop("wall_seconds")
     b.pop("wall_seconds")
     assert a == b
-    # branch.csv, column by column, bit for bit (the CLI writes shortest round-trip digits)
     with open(out / "branch.csv") as f:
         rows = list(csv.DictReader(f))
     assert list(br.table) == list(rows[0].keys())
@@ -100,6 +94,17 @@ def test_branch_is_the_cli_branch(cli, tmp_path):
         else:
             assert np.array_equal(col, [float(r[name]) if r[name] else np.nan for r in rows],
                                   equal_nan=True), name
+
+
+def test_branch_is_the_cli_branch(cli, tmp_path):
+    """rubdyn.branch: the same continuation, branch.json and branch.csv as `rubdyn branch`."""
+    out = tmp_path / "b"
+    p = run_cli(cli, "branch", FULL_RUB, "--vary", "initial.omega0", "--points", "4", "--out",
+                str(out))
+    assert p.returncode == 0, p.stderr
+    br = rubdyn.branch(FULL_RUB, "initial.omega0", points=4)
+    assert br.exit_code == 0 and br["outcome"] == "max_points" and br["points"] == 4
+    assert_cli_branch(br, out)
     assert br.values[0] == 1500.0 and np.all(np.diff(br.values) > 0)
     assert br.table["stability"] == ["stable"] * 4
     # bad input: the CLI's exit 2 is rubdyn.CaseError
@@ -107,3 +112,28 @@ def test_branch_is_the_cli_branch(cli, tmp_path):
         rubdyn.branch(FULL_RUB, "rotor.nonsense", points=2)
     with pytest.raises(ValueError, match="branch: points"):
         rubdyn.branch(FULL_RUB, "initial.omega0", points=0)
+
+
+def test_branch_resume_and_method_as_the_cli(cli, tmp_path):
+    """rubdyn.branch(resume=) continues a Branch as `rubdyn branch --resume` continues its
+    folder: the same points, bit for bit; monodromy="sensitivities" as --monodromy."""
+    out = tmp_path / "b"
+    common = ["branch", FULL_RUB, "--vary", "initial.omega0", "--monodromy", "sensitivities",
+              "--out", str(out)]
+    for extra in (["--points", "3"], ["--points", "6", "--resume"]):
+        p = run_cli(cli, *common, *extra)
+        assert p.returncode == 0, p.stderr
+    first = rubdyn.branch(FULL_RUB, "initial.omega0", points=3, monodromy="sensitivities")
+    br = rubdyn.branch(FULL_RUB, "initial.omega0", points=6, monodromy="sensitivities",
+                       resume=first)
+    assert br["monodromy"] == "sensitivities" and br["points"] == 6
+    assert br["started"].startswith("resumed from its point 2")
+    assert_cli_branch(br, out)
+    # another case's branch, or another method: rubdyn.CaseError, as the CLI's exit 2
+    with pytest.raises(rubdyn.CaseError, match="another case"):
+        rubdyn.branch(FULL_RUB, "initial.omega0", points=6, monodromy="sensitivities",
+                      resume=first, rtol=1e-9)
+    with pytest.raises(rubdyn.CaseError, match="monodromies"):
+        rubdyn.branch(FULL_RUB, "initial.omega0", points=6, resume=first)
+    with pytest.raises(ValueError, match="one or the other"):
+        rubdyn.branch(FULL_RUB, "initial.omega0", resume=first, switch=first)

@@ -669,14 +669,6 @@ bool move_section(const ModelFamily& family, const ContinuationOptions& opt,
   return true;
 }
 
-/// The real multipliers below -1.
-int below_minus_one(const FloquetAnalysis& f) {
-  int n = 0;
-  for (const auto& m : f.multipliers)
-    if (std::abs(m.value.imag()) <= kRealImag && m.value.real() < -1.0) ++n;
-  return n;
-}
-
 struct Located {
   double lambda = 0.0, spread = 0.0;
   std::string how;
@@ -772,6 +764,13 @@ Located locate_crossing(const ModelFamily& family, const PointData& from, double
 
 }  // namespace
 
+int real_multipliers_below_minus_one(const FloquetAnalysis& f) {
+  int n = 0;
+  for (const auto& m : f.multipliers)
+    if (std::abs(m.value.imag()) <= kRealImag && m.value.real() < -1.0) ++n;
+  return n;
+}
+
 Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_guess,
                              const ContinuationOptions& opt) {
   const auto clock0 = std::chrono::steady_clock::now();
@@ -792,13 +791,15 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
   } catch (const std::exception& e) {
     return done("start_failed", e.what());
   }
-  const PeriodMap map0(*pm0.model, pm0.t0, pm0.options);
+  const double t0 = std::isnan(opt.t0) ? pm0.t0 : opt.t0;
+  const double T0 = pm0.autonomous && !std::isnan(opt.period) ? opt.period : pm0.period;
+  const PeriodMap map0(*pm0.model, t0, pm0.options);
   OrbitOptions o0 = opt.orbit;
   o0.samples = 0;
   const OrbitResult first =
-      pm0.autonomous ? find_autonomous_orbit(map0, x_guess, pm0.period,
-                                             2.0 * std::numbers::pi / pm0.period, pm0.pinned, o0)
-                     : find_forced_orbit(map0, x_guess, pm0.period, pm0.omega, o0);
+      pm0.autonomous
+          ? find_autonomous_orbit(map0, x_guess, T0, 2.0 * std::numbers::pi / T0, pm0.pinned, o0)
+          : find_forced_orbit(map0, x_guess, T0, pm0.omega, o0);
   runs += first.runs;
   if (!first.converged())
     return done("start_failed", "the orbit at the first value: " + first.message);
@@ -806,11 +807,19 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
   {
     PointData p0;
     std::string why;
-    if (!make_point(family, lambda0, first.x0, opt, p0, why, runs, nullptr, pm0.t0,
+    if (!make_point(family, lambda0, first.x0, opt, p0, why, runs, nullptr, t0,
                     pm0.autonomous ? first.period : std::numeric_limits<double>::quiet_NaN()))
       return done("start_failed", why);
     const int d = p0.chart->dim();
-    if (p0.t(d) * opt.direction < 0) p0.t = -p0.t;
+    if (opt.previous_x.size() == p0.p.x0.size()) {
+      // along the secant from the point before (in this point's chart)
+      const Vec sec =
+          pack(p0, p0.p.x0, p0.p.period, lambda0, opt.lambda_scale) -
+          pack(p0, opt.previous_x, opt.previous_period, opt.previous_lambda, opt.lambda_scale);
+      if (p0.t.dot(sec) < 0) p0.t = -p0.t;
+    } else if (p0.t(d) * opt.direction < 0) {
+      p0.t = -p0.t;
+    }
     p0.p.tangent_lambda = p0.t(d);
     p0.p.runs = runs;
     b.points.push_back(p0.p);
@@ -966,7 +975,10 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
           evals + 2, m0, m1);
       b.specials.push_back(f);
     }
-    if (std::abs(below_minus_one(a.floquet) - below_minus_one(p.floquet)) % 2 == 1) {
+    if (std::abs(real_multipliers_below_minus_one(a.floquet) -
+                 real_multipliers_below_minus_one(p.floquet)) %
+            2 ==
+        1) {
       // a real multiplier through -1: det(Phi + I) changes sign (complex pairs add |mu + 1|^2)
       BranchSpecial s;
       s.kind = "period_doubling";
@@ -982,7 +994,8 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
       s.how = fmt::format(
           "a real multiplier crosses -1 (the real multipliers below -1: {} -> {}); located where "
           "det(Phi + I) changes sign, {}",
-          below_minus_one(a.floquet), below_minus_one(p.floquet), loc.how);
+          real_multipliers_below_minus_one(a.floquet), real_multipliers_below_minus_one(p.floquet),
+          loc.how);
       b.specials.push_back(s);
     }
     if (neimark_sacker_between(a.floquet, p.floquet)) {

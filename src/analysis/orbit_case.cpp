@@ -9,10 +9,12 @@
 #include <cmath>
 #include <cstring>
 #include <iterator>
+#include <map>
 #include <numbers>
 
 #include "rubdyn/io/case_io.hpp"
 #include "rubdyn/io/columns.hpp"
+#include "rubdyn/io/json_reader.hpp"
 #include "rubdyn/io/model_registry.hpp"
 #include "rubdyn/io/solver_options.hpp"
 #include "rubdyn/io/text_files.hpp"
@@ -283,6 +285,17 @@ void write_orbit_files(const HeldFolder& folder, const CaseSpec& spec, const Cas
   write_file_at(folder.fd(), "orbit.json", dir + "/orbit.json", orbit_json(spec, o));
 }
 
+namespace {
+
+/// The index of the branch's first period doubling among its specials (-1: none).
+int pd_special(const CaseBranch& b) {
+  for (std::size_t i = 0; i < b.branch.specials.size(); ++i)
+    if (b.branch.specials[i].kind == "period_doubling") return static_cast<int>(i);
+  return -1;
+}
+
+}  // namespace
+
 std::vector<CaseIssue> branch_issues(const CaseSpec& spec, const CaseBranchOptions& o) {
   // a forced orbit (a prescribed constant spin) or an autonomous one (a free spin, --period)
   std::vector<CaseIssue> bad = orbit_issues(spec, o.orbit);
@@ -303,8 +316,88 @@ std::vector<CaseIssue> branch_issues(const CaseSpec& spec, const CaseBranchOptio
   if (!(o.scale >= 0.0) || !std::isfinite(o.scale))
     bad.push_back({cl, 0, "--scale", fmt::format("{}", o.scale), "must be finite and >= 0"});
   if (std::isinf(o.to)) bad.push_back({cl, 0, "--to", fmt::format("{}", o.to), "must be finite"});
+  if (o.resume && o.switch_from)
+    bad.push_back({cl, 0, "--resume", "", "resumes a branch; --switch starts another: not both"});
+  // the earlier branch: of this key, and of this model (its state's coordinates)
+  const CaseBranch* old = o.resume ? o.resume : o.switch_from;
+  const std::string opt = o.resume ? "--resume" : "--switch";
+  if (old && old->key != o.key)
+    bad.push_back({cl, 0, opt, old->key,
+                   fmt::format("the earlier branch varies {}, not --vary {}", old->key, o.key)});
+  if (old && bad.empty()) {
+    std::vector<std::string> names;
+    const auto model = build_model(spec);
+    for (const auto& c : model->coordinates()) names.push_back(c.name);
+    for (const auto& c : model->coordinates()) names.push_back(c.rate);
+    if (names != old->state_names)
+      bad.push_back(
+          {cl, 0, opt, "", "the earlier branch's states are of another model (other coordinates)"});
+  }
+  if (o.resume) {
+    const std::string method =
+        o.orbit.orbit.provider ? std::string(o.orbit.orbit.provider->name()) : "finite differences";
+    if (o.resume->periods != o.orbit.periods)
+      bad.push_back(
+          {cl, 0, "--periods", std::to_string(o.orbit.periods),
+           fmt::format("the resumed branch's orbits have {} periods", o.resume->periods)});
+    if (o.resume->monodromy != method)
+      bad.push_back({cl, 0, "--monodromy", method,
+                     fmt::format("the resumed branch's monodromies are by {}: the same method",
+                                 o.resume->monodromy)});
+  }
+  if (o.switch_from) {
+    if (spec.loads().spin != SpinDrive::Prescribed)
+      bad.push_back({cl, 0, "--switch", "",
+                     "branch switching at a period doubling is for forced orbits (a prescribed "
+                     "spin)"});
+    const auto& sp = o.switch_from->branch.specials;
+    const int n = static_cast<int>(sp.size());
+    const int k = o.special >= 0 ? o.special : pd_special(*o.switch_from);
+    if (k < 0 || k >= n || sp[static_cast<std::size_t>(k)].kind != "period_doubling" ||
+        sp[static_cast<std::size_t>(k)].x.size() == 0)
+      bad.push_back(
+          {cl, 0, o.special >= 0 ? "--special" : "--switch",
+           o.special >= 0 ? std::to_string(o.special) : "",
+           fmt::format("must name a period doubling with its orbit among the branch's {} special "
+                       "points (branch.json's specials, counted from 0)",
+                       n)});
+    if (!(o.switch_eps > 0.0) || !std::isfinite(o.switch_eps))
+      bad.push_back(
+          {cl, 0, "--switch-eps", fmt::format("{}", o.switch_eps), "must be finite and > 0"});
+    if (!std::isnan(o.switch_offset) && !(o.switch_offset > 0.0 && std::isfinite(o.switch_offset)))
+      bad.push_back(
+          {cl, 0, "--switch-offset", fmt::format("{}", o.switch_offset), "must be finite and > 0"});
+  }
   return bad;
 }
+
+namespace {
+
+/// Appends the branch `next` (continued from point n - 1 of `into`, its own first point that
+/// point again) to `into`: its points after the first, its specials and section moves with their
+/// points renumbered, its outcome, runs and time.
+void append_branch(Branch& into, const Branch& next) {
+  const int n = static_cast<int>(into.points.size());
+  const double s0 = into.points.back().arclength;
+  for (std::size_t i = 1; i < next.points.size(); ++i) {
+    into.points.push_back(next.points[i]);
+    into.points.back().arclength += s0;
+  }
+  for (BranchSpecial sp : next.specials) {
+    sp.after += n - 1;
+    into.specials.push_back(std::move(sp));
+  }
+  for (Branch::SectionMove m : next.section_moves) {
+    m.after += n - 1;
+    into.section_moves.push_back(m);
+  }
+  into.outcome = next.outcome;
+  into.message = next.message;
+  into.runs += next.runs;
+  into.wall_seconds += next.wall_seconds;
+}
+
+}  // namespace
 
 CaseBranch find_case_branch(const std::string& text, const std::string& source,
                             const std::vector<std::string>& overrides, const CaseBranchOptions& o) {
@@ -312,14 +405,14 @@ CaseBranch find_case_branch(const std::string& text, const std::string& source,
   if (auto bad = branch_issues(spec, o); !bad.empty()) throw CaseError(std::move(bad));
   CaseBranch out;
   out.key = o.key;
-  out.periods = o.orbit.periods;
+  out.periods = o.switch_from ? 2 * o.switch_from->periods : o.orbit.periods;
   out.monodromy = o.orbit.orbit.provider ? o.orbit.orbit.provider->name() : "finite differences";
   for (const auto& e : case_values(spec))
     if (e.full() == o.key) out.lambda0 = std::get<double>(e.value);
   const auto model = build_model(spec);
   for (const auto& c : model->coordinates()) out.state_names.push_back(c.name);
   for (const auto& c : model->coordinates()) out.state_names.push_back(c.rate);
-  const int k = o.orbit.periods;
+  const int k = out.periods;
   const std::atomic<bool>* stop = o.orbit.stop;
   const double T_guess = o.orbit.period * k;  // an autonomous orbit's (NaN: forced)
   const ModelFamily family = [&text, &source, &overrides, key = o.key, k, stop,
@@ -351,6 +444,135 @@ CaseBranch find_case_branch(const std::string& text, const std::string& source,
   if (std::isfinite(o.to)) (o.to >= out.lambda0 ? c.lambda_max : c.lambda_min) = o.to;
   c.orbit = o.orbit.orbit;
   c.orbit.samples = std::min(c.orbit.samples, 50);  // the amplitude and forces: 50 per period
+
+  if (o.resume) {
+    // on from the last point of the earlier branch, the way it went
+    const Branch& old = o.resume->branch;
+    out.lambda0 = o.resume->lambda0;
+    out.branch = old;
+    const int n = static_cast<int>(old.points.size());
+    if (old.outcome == "events_change" || old.outcome == "lambda_bound" || n >= o.points) {
+      out.started = o.resume->started;
+      out.nothing_to_resume = true;
+      return out;
+    }
+    // (an end located where the earlier run's steps failed is not an end of the branch)
+    std::erase_if(out.branch.specials,
+                  [n](const BranchSpecial& sp) { return sp.kind == "end" && sp.after >= n - 1; });
+    const BranchPoint& last = old.points.back();
+    c.t0 = last.t0;
+    c.period = last.period;
+    c.max_points = o.points - (n - 1);
+    if (n >= 2 && old.points[static_cast<std::size_t>(n - 2)].t0 == last.t0) {
+      const BranchPoint& prev = old.points[static_cast<std::size_t>(n - 2)];
+      c.previous_x = prev.x0;
+      c.previous_period = prev.period;
+      c.previous_lambda = prev.lambda;
+    } else if (std::isfinite(last.tangent_lambda) && last.tangent_lambda != 0.0) {
+      c.direction = last.tangent_lambda > 0 ? +1 : -1;
+    }
+    const Branch next = continue_forced_orbit(family, last.lambda, last.x0, c);
+    out.started =
+        fmt::format("resumed from its point {} ({} = {:.10g})", n - 1, o.key, last.lambda);
+    if (next.points.empty()) {
+      out.branch.outcome = next.outcome;
+      out.branch.message = "resuming from the last point: " + next.message;
+      out.branch.runs += next.runs;
+      out.branch.wall_seconds += next.wall_seconds;
+      return out;
+    }
+    append_branch(out.branch, next);
+    return out;
+  }
+
+  if (o.switch_from) {
+    // the period-2k orbit near the doubling: Newton from the doubling's orbit moved along its
+    // multiplier -1's direction, on either side of it
+    const CaseBranch& from = *o.switch_from;
+    const int ks = o.special >= 0 ? o.special : pd_special(from);
+    const BranchSpecial& pd = from.branch.specials[static_cast<std::size_t>(ks)];
+    const auto& pts = from.branch.points;
+    const std::size_t a = static_cast<std::size_t>(pd.after);
+    const BranchPoint* pa = a < pts.size() ? &pts[a] : nullptr;
+    const BranchPoint* pb = a + 1 < pts.size() ? &pts[a + 1] : nullptr;
+    // the offsets tried: the one given, or half the distance of the points around the doubling
+    // and then a quarter of the last, 4 in all (the period-2k orbits split from the period-k
+    // one as sqrt(|lambda - lambda_PD|): Newton from the doubling's orbit moved by switch_eps
+    // converges where the split is of that order, nearer the doubling on a short branch)
+    std::vector<double> deltas = {o.switch_offset};
+    if (std::isnan(o.switch_offset)) {
+      deltas = {0.5 * (pa && pb ? std::abs(pb->lambda - pa->lambda)
+                                : (pa ? std::abs(pa->lambda - pd.lambda) : c.lambda_scale))};
+      for (int j = 1; j < 4; ++j) deltas.push_back(0.25 * deltas.back());
+    }
+    // the side where the period-k orbit has the real multiplier below -1 first (the period-2k
+    // orbits of a supercritical doubling lie there), then the other
+    int first = o.direction;
+    if (pa && pb) {
+      const int na = real_multipliers_below_minus_one(pa->floquet);
+      const int nb = real_multipliers_below_minus_one(pb->floquet);
+      if (na != nb)
+        first = (na > nb ? pa->lambda - pd.lambda : pb->lambda - pd.lambda) > 0 ? 1 : -1;
+    }
+    std::string tried;
+    long runs = 0;
+    for (const double delta : deltas)
+      for (const int side : {first, -first}) {
+        const double lambda = pd.lambda + side * delta;
+        ParameterModel pm = family(lambda);
+        const PeriodMap map(*pm.model, pd.t0, pm.options);
+        OrbitOptions o0 = c.orbit;
+        o0.samples = 0;
+        const Vec guess = pd.x + o.switch_eps * pd.direction;
+        const OrbitResult r = find_forced_orbit(map, guess, pm.period, pm.omega, o0);
+        runs += r.runs;
+        if (!r.converged()) {
+          tried += fmt::format("; at {:.10g}: {}", lambda, r.message);
+          continue;
+        }
+        // a period-2k orbit, not the period-k orbit twice: k periods move it by far more than
+        // Newton's tolerance (the period-k orbit by its residual, ~tol; the period-2k orbits split
+        // from it as sqrt(|lambda - lambda_PD|), 0.04 .. 0.15 of the gap scale on the impact
+        // oscillator 0.05 .. 0.6 rad/s from its doubling): 1e4 tol
+        const FlowRun half = map.run(r.x0, 0.5 * pm.period);
+        ++runs;
+        const Vec D = state_scale(*pm.model, pm.omega);
+        const double split =
+            half.complete()
+                ? ((stacked_state(half.samples.back()) - r.x0).array() / D.array()).abs().maxCoeff()
+                : 0.0;
+        if (!(split > 1e4 * o0.tol)) {
+          tried += fmt::format(
+              "; at {:.10g}: Newton found the period-{} orbit (moved by {:.2g} in "
+              "{} periods)",
+              lambda, from.periods, split, from.periods);
+          continue;
+        }
+        c.t0 = pd.t0;
+        c.direction = side;
+        Branch b = continue_forced_orbit(family, lambda, r.x0, c);
+        b.runs += runs;
+        out.lambda0 = lambda;
+        out.branch = std::move(b);
+        out.started = fmt::format(
+            "switched at the period doubling at {} = {:.12g} (special {} of a branch of period "
+            "{}): "
+            "its orbit moved by {:.3g} along the direction of its multiplier -1, Newton at {:.10g} "
+            "({:+.3g} from the doubling), whose orbit of period {} moves by {:.3g} (scaled) in {} "
+            "periods",
+            o.key, pd.lambda, ks, from.periods, o.switch_eps, lambda, side * delta, out.periods,
+            split, from.periods);
+        return out;
+      }
+    out.lambda0 = pd.lambda;
+    out.branch.outcome = "start_failed";
+    out.branch.message =
+        fmt::format("no orbit of period {} near the period doubling at {:.12g} on either side{}",
+                    out.periods, pd.lambda, tried);
+    out.branch.runs = runs;
+    return out;
+  }
+
   const MechanicalState s0 = initial_state(spec);
   Vec x(2 * model->num_dofs());
   x << s0.q, s0.v;
@@ -367,7 +589,8 @@ std::string branch_csv(const CaseBranch& b) {
        "cone_min,residual,stability,mu_max_abs";
   for (std::size_t j = 1; j <= nm; ++j)
     s += fmt::format(",mu{0}_re,mu{0}_im,mu{0}_abs,mu{0}_error", j);
-  s += ",corrector_iterations,runs,t0";  // t0: the section's time, where the state is
+  // t0: the section's time, where the state is; tangent_lambda: d key / ds (scaled)
+  s += ",corrector_iterations,runs,t0,tangent_lambda";
   for (const auto& n : b.state_names) {
     s += ',';
     s += n;
@@ -388,7 +611,7 @@ std::string branch_csv(const CaseBranch& b) {
       else
         s += ",,,,";
     }
-    fmt::format_to(out, ",{},{},{}", p.corrector_iterations, p.runs, p.t0);
+    fmt::format_to(out, ",{},{},{},{}", p.corrector_iterations, p.runs, p.t0, p.tangent_lambda);
     for (Eigen::Index j = 0; j < p.x0.size(); ++j) fmt::format_to(out, ",{}", p.x0(j));
     s += ',';
     s += quoted_string(p.signature);
@@ -403,9 +626,10 @@ std::string branch_json(const CaseBranch& b) {
   auto out = std::back_inserter(s);
   fmt::format_to(out,
                  "{{\n  \"key\": {},\n  \"from\": {},\n  \"periods\": {},\n  \"monodromy\": {},\n"
-                 "  \"outcome\": {},\n  \"message\": {},\n  \"points\": {},\n  \"specials\": [",
-                 str(b.key), num(b.lambda0), b.periods, str(b.monodromy), str(r.outcome),
-                 str(r.message), r.points.size());
+                 "  \"started\": {},\n  \"outcome\": {},\n  \"message\": {},\n  \"points\": {},\n"
+                 "  \"specials\": [",
+                 str(b.key), num(b.lambda0), b.periods, str(b.monodromy), str(b.started),
+                 str(r.outcome), str(r.message), r.points.size());
   for (std::size_t i = 0; i < r.specials.size(); ++i) {
     const auto& x = r.specials[i];
     fmt::format_to(out,
@@ -438,6 +662,219 @@ std::string branch_json(const CaseBranch& b) {
   fmt::format_to(out, "\n  ],\n  \"runs\": {},\n  \"wall_seconds\": {}\n}}\n", r.runs,
                  num(r.wall_seconds));
   return s;
+}
+
+namespace {
+
+/// Reads a branch folder's files back (read_case_branch), every failure a CaseIssue naming the
+/// file, line and key.
+class BranchReader {
+ public:
+  BranchReader(const std::string& source)
+      : json_file_(source + "/branch.json"), csv_file_(source + "/branch.csv") {}
+
+  [[noreturn]] void refuse(const std::string& file, int line, const std::string& key,
+                           const std::string& value, const std::string& rule) const {
+    throw CaseError({{file, line, key, printable_text(value), rule}});
+  }
+
+  const JsonValue& member(const JsonValue& obj, const std::string& key, JsonValue::Kind kind,
+                          const std::string& where) const {
+    const JsonValue* v = obj.find(key);
+    if (!v || v->kind != kind)
+      refuse(json_file_, 0, where + key, "",
+             fmt::format("missing, or not a {} (not a branch.json of rubdyn branch?)",
+                         kind == JsonValue::Kind::String   ? "string"
+                         : kind == JsonValue::Kind::Number ? "number"
+                         : kind == JsonValue::Kind::Array  ? "list"
+                                                           : "table"));
+    return *v;
+  }
+  /// A number, or null for NaN.
+  double number(const JsonValue& obj, const std::string& key, const std::string& where) const {
+    const JsonValue* v = obj.find(key);
+    if (v && v->kind == JsonValue::Kind::Null) return std::numeric_limits<double>::quiet_NaN();
+    return member(obj, key, JsonValue::Kind::Number, where).number;
+  }
+
+  void json(std::string_view text, CaseBranch& b) const {
+    JsonValue doc;
+    try {
+      doc = parse_json(text);
+    } catch (const JsonError& e) {
+      refuse(json_file_, e.line(), "", "", std::string("not JSON: ") + e.what());
+    }
+    if (doc.kind != JsonValue::Kind::Object)
+      refuse(json_file_, 1, "", "", "must hold one JSON table (a branch.json of rubdyn branch)");
+    b.key = member(doc, "key", JsonValue::Kind::String, "").string;
+    b.lambda0 = number(doc, "from", "");
+    // (written since periods and the method were: a branch before them had 1 and differences)
+    b.periods = doc.find("periods") ? static_cast<int>(number(doc, "periods", "")) : 1;
+    b.monodromy = doc.find("monodromy")
+                      ? member(doc, "monodromy", JsonValue::Kind::String, "").string
+                      : "finite differences";
+    if (doc.find("started")) b.started = member(doc, "started", JsonValue::Kind::String, "").string;
+    Branch& r = b.branch;
+    r.outcome = member(doc, "outcome", JsonValue::Kind::String, "").string;
+    r.message = member(doc, "message", JsonValue::Kind::String, "").string;
+    r.runs = static_cast<long>(number(doc, "runs", ""));
+    r.wall_seconds = number(doc, "wall_seconds", "");
+    const auto& specials = member(doc, "specials", JsonValue::Kind::Array, "").array;
+    for (std::size_t i = 0; i < specials.size(); ++i) {
+      const JsonValue& x = specials[i];
+      const std::string where = fmt::format("specials[{}].", i);
+      BranchSpecial sp;
+      sp.kind = member(x, "kind", JsonValue::Kind::String, where).string;
+      sp.lambda = number(x, "value", where);
+      sp.spread = number(x, "spread", where);
+      const auto& between = member(x, "between", JsonValue::Kind::Array, where).array;
+      if (between.empty() || between[0].kind != JsonValue::Kind::Number)
+        refuse(json_file_, 0, where + "between", "", "must be a list of two point numbers");
+      sp.after = static_cast<int>(between[0].number);
+      sp.how = member(x, "how", JsonValue::Kind::String, where).string;
+      if (x.find("state")) {
+        sp.t0 = number(x, "t0", where);
+        sp.x = named_state(member(x, "state", JsonValue::Kind::Object, where), b.state_names,
+                           where + "state");
+        sp.direction = named_state(member(x, "direction", JsonValue::Kind::Object, where),
+                                   b.state_names, where + "direction");
+      }
+      r.specials.push_back(std::move(sp));
+    }
+    if (doc.find("section_moves"))
+      for (const JsonValue& m : member(doc, "section_moves", JsonValue::Kind::Array, "").array)
+        r.section_moves.push_back({static_cast<int>(number(m, "after", "section_moves.")),
+                                   number(m, "t0", "section_moves.")});
+  }
+
+  Vec named_state(const JsonValue& obj, const std::vector<std::string>& names,
+                  const std::string& where) const {
+    Vec x(static_cast<Eigen::Index>(names.size()));
+    for (std::size_t j = 0; j < names.size(); ++j)
+      x(static_cast<Eigen::Index>(j)) = number(obj, names[j], where + ".");
+    if (obj.object.size() != names.size())
+      refuse(json_file_, 0, where, "",
+             fmt::format("must have the {} coordinates and rates of branch.csv's state",
+                         names.size()));
+    return x;
+  }
+
+  /// branch.csv's points (and the state's names from its header: the columns between
+  /// tangent_lambda, or t0, and events).
+  void csv(std::string_view text, CaseBranch& b) const {
+    std::vector<std::string> lines;
+    for (std::size_t at = 0; at < text.size();) {
+      const std::size_t e = text.find('\n', at);
+      if (e == std::string_view::npos) {
+        refuse(csv_file_, static_cast<int>(lines.size()) + 1, "", "",
+               "the last row has no line end (the file was cut short)");
+      }
+      lines.emplace_back(text.substr(at, e - at));
+      at = e + 1;
+    }
+    if (lines.empty()) refuse(csv_file_, 1, "", "", "empty: no header");
+    const std::vector<std::string> head = split_csv_line(lines[0]);
+    std::map<std::string, std::size_t> col;
+    for (std::size_t j = 0; j < head.size(); ++j) col[head[j]] = j;
+    const auto need = [&](const std::string& name) {
+      const auto it = col.find(name);
+      if (it == col.end())
+        refuse(csv_file_, 1, name, "", "a column of branch.csv that the header lacks");
+      return it->second;
+    };
+    const std::size_t first_state =
+        (col.count("tangent_lambda") ? need("tangent_lambda") : need("t0")) + 1;
+    const std::size_t events = need("events");
+    if (events != head.size() - 1 || events < first_state)
+      refuse(csv_file_, 1, "events", "", "must be the last column, after the state's");
+    b.state_names.assign(head.begin() + static_cast<std::ptrdiff_t>(first_state),
+                         head.begin() + static_cast<std::ptrdiff_t>(events));
+    need(b.key);
+    int nm = 0;
+    while (col.count(fmt::format("mu{}_re", nm + 1))) ++nm;
+    for (std::size_t i = 1; i < lines.size(); ++i) {
+      const std::vector<std::string> f = split_csv_line(lines[i]);
+      const int line = static_cast<int>(i) + 1;
+      if (f.size() != head.size())
+        refuse(csv_file_, line, "", "",
+               fmt::format("has {} fields, the header {}", f.size(), head.size()));
+      const auto value = [&](const std::string& name) {
+        const std::string& t = f[need(name)];
+        char* end = nullptr;
+        const double x = std::strtod(t.c_str(), &end);
+        if (t.empty() || *end != '\0') refuse(csv_file_, line, name, t, "must be a number");
+        return x;
+      };
+      BranchPoint p;
+      p.lambda = value(b.key);
+      p.arclength = value("arclength");
+      p.period = value("period");
+      p.amplitude = value("amplitude");
+      p.F_N_max = value("F_N_max");
+      p.F_N_min = value("F_N_min");
+      p.d_N_min = value("d_N_min");
+      p.d_N_dip = value("d_N_dip");
+      p.free_time = value("free_time");
+      p.impact_speed_min = value("impact_speed_min");
+      p.cone_min = value("cone_min");
+      p.residual = value("residual");
+      const std::string& st = f[need("stability")];
+      p.floquet.stability = st == "stable"     ? Stability::Stable
+                            : st == "unstable" ? Stability::Unstable
+                                               : Stability::Undecided;
+      for (int j = 1; j <= nm; ++j) {
+        if (f[need(fmt::format("mu{}_re", j))].empty()) break;
+        FloquetMultiplier m;
+        m.value = {value(fmt::format("mu{}_re", j)), value(fmt::format("mu{}_im", j))};
+        m.error = value(fmt::format("mu{}_error", j));
+        p.floquet.multipliers.push_back(std::move(m));
+      }
+      p.corrector_iterations = static_cast<int>(value("corrector_iterations"));
+      p.runs = static_cast<long>(value("runs"));
+      p.t0 = value("t0");
+      p.tangent_lambda = col.count("tangent_lambda") ? value("tangent_lambda")
+                                                     : std::numeric_limits<double>::quiet_NaN();
+      p.x0.resize(static_cast<Eigen::Index>(b.state_names.size()));
+      for (std::size_t j = 0; j < b.state_names.size(); ++j)
+        p.x0(static_cast<Eigen::Index>(j)) = value(b.state_names[j]);
+      p.signature = f[events];
+      b.branch.points.push_back(std::move(p));
+    }
+    if (b.branch.points.empty()) refuse(csv_file_, 2, "", "", "no point: the branch is empty");
+  }
+
+ private:
+  std::string json_file_, csv_file_;
+};
+
+}  // namespace
+
+CaseBranch read_case_branch(std::string_view json, std::string_view csv,
+                            const std::string& source) {
+  const BranchReader r(source);
+  CaseBranch b;
+  // the key first (the csv's column), the state's names from the csv (the json's state by them)
+  {
+    JsonValue doc;
+    try {
+      doc = parse_json(json);
+    } catch (const JsonError& e) {
+      r.refuse(source + "/branch.json", e.line(), "", "", std::string("not JSON: ") + e.what());
+    }
+    const JsonValue* key = doc.find("key");
+    if (!key || key->kind != JsonValue::Kind::String)
+      r.refuse(source + "/branch.json", 0, "key", "",
+               "missing (not a branch.json of rubdyn branch?)");
+    b.key = key->string;
+  }
+  r.csv(csv, b);
+  r.json(json, b);
+  const int n = static_cast<int>(b.branch.points.size());
+  for (const BranchSpecial& sp : b.branch.specials)
+    if (sp.after < 0 || sp.after >= n)
+      r.refuse(source + "/branch.json", 0, "specials.between", std::to_string(sp.after),
+               fmt::format("must be a point of branch.csv (0 to {})", n - 1));
+  return b;
 }
 
 void write_branch_files(const HeldFolder& folder, const CaseBranch& b) {

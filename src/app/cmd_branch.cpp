@@ -25,12 +25,15 @@ namespace rubdyn::app {
 
 namespace {
 
+/// branch.csv of 10 000 points of a 1000-coordinate model is about 400 MB; more is not a branch.
+constexpr std::size_t kMaxBranchBytes = std::size_t{1} << 30;
+
 struct BranchArgs {
   CaseArgs c;
   std::string key;
-  std::optional<std::string> out, from, at, rtol, atol;
+  std::optional<std::string> out, from, at, rtol, atol, switch_dir;
   std::optional<double> to;
-  bool down = false;
+  bool down = false, resume = false;
   std::string monodromy = "differences";
   CaseBranchOptions o;
 };
@@ -61,16 +64,54 @@ int branch_command(BranchArgs& a) {
     const auto more = branch_issues(spec, a.o);
     bad.insert(bad.end(), more.begin(), more.end());
   }
+  const std::string dir = a.out ? *a.out : output_folder(spec) + "-branch";
+  // the earlier branch to resume (this folder's) or to switch from (--switch's folder)
+  std::optional<CaseBranch> earlier;
+  if (bad.empty() && (a.resume || a.switch_dir)) {
+    const std::string src = a.resume ? dir : *a.switch_dir;
+    const std::string opt = a.resume ? "--resume" : "--switch";
+    const auto read = [&](const std::string& name, std::size_t max_bytes) {
+      try {
+        return read_input_file(src + "/" + name, max_bytes, "branch folder's");
+      } catch (const InputRefused& e) {
+        throw CaseError({{"command line", 0, opt, src,
+                          fmt::format("needs a folder that rubdyn branch wrote: {}/{}: {}", src,
+                                      name, e.what())}});
+      }
+    };
+    const std::string json = read("branch.json", kMaxBranchBytes);
+    const std::string csv = read("branch.csv", kMaxBranchBytes);
+    // the same case and settings as the branch in the folder (its case.resolved.toml): the
+    // forcing's phase at a section time, the tolerances, the model
+    if (read("case.resolved.toml", kMaxCaseBytes) != to_toml(spec))
+      bad.push_back({"command line", 0, opt, src,
+                     "the folder's branch is of another case or other settings (its "
+                     "case.resolved.toml differs from this command's case, with its --set, "
+                     "--from and tolerances): use those of the command that wrote it"});
+    earlier = read_case_branch(json, csv, src);
+    (a.resume ? a.o.resume : a.o.switch_from) = &*earlier;
+    const auto more = branch_issues(spec, a.o);
+    bad.insert(bad.end(), more.begin(), more.end());
+  }
   if (!bad.empty()) throw CaseError(bad);  // exit 2, nothing written
   const std::string text = read_input_file(a.c.path, kMaxCaseBytes, "case");
 
-  const std::string dir = a.out ? *a.out : output_folder(spec) + "-branch";
   stop_on_signals();
   a.o.orbit.stop = &stop_flag();
-  const auto folder = open_orbit_folder(dir, spec, {"branch.csv", "branch.json"});
+  // (a resumed branch's files stay until its longer version replaces them)
+  const auto folder =
+      open_orbit_folder(dir, spec,
+                        a.resume ? std::vector<std::string>{}
+                                 : std::vector<std::string>{"branch.csv", "branch.json"});
   const CaseBranch b = find_case_branch(text, a.c.path, sets, a.o);
-  write_branch_files(*folder, b);
   const Branch& r = b.branch;
+  if (b.nothing_to_resume) {
+    std::printf("resume        nothing to do: the branch in %s has %zu points and ended: %s\n",
+                dir.c_str(), r.points.size(), r.outcome.c_str());
+    return 0;
+  }
+  write_branch_files(*folder, b);
+  if (!b.started.empty()) std::printf("started       %s\n", b.started.c_str());
   std::printf("branch        %s from %.10g: %zu points, %s (%s)\n", b.key.c_str(), b.lambda0,
               r.points.size(), r.outcome.c_str(), r.message.c_str());
   if (!r.points.empty()) {
@@ -122,6 +163,21 @@ void add_branch_command(CLI::App& app, Action& action) {
                   "every point's monodromy (its multipliers, the corrector's Jacobian) from finite "
                   "differences of the return map (default) or from the flow's sensitivities")
       ->check(CLI::IsMember({"differences", "sensitivities"}));
+  sub->add_flag("--resume", a->resume,
+                "continue the branch in the output folder (an interrupted or shorter run of the "
+                "same command) from its last point, to --points in all");
+  sub->add_option("--switch", a->switch_dir,
+                  "branch switching: follow the orbits of twice the period that leave the first "
+                  "period doubling of the branch in this folder (a forced orbit)");
+  sub->add_option("--special", a->o.special,
+                  "with --switch: the period doubling's index among the folder's special points "
+                  "(branch.json, from 0)");
+  sub->add_option("--switch-offset", a->o.switch_offset,
+                  "with --switch: the first orbit's distance from the doubling in the key "
+                  "(default: half the distance of the two points around it)");
+  sub->add_option("--switch-eps", a->o.switch_eps,
+                  "with --switch: the step from the doubling's orbit along its multiplier -1's "
+                  "direction, in the scaled state (default 0.05)");
   sub->add_option("--out", a->out, "output folder (default: the case's output folder + -branch)");
   sub->add_option("--from", a->from, "start from the last complete sample of this output folder");
   sub->add_option("--at", a->at, "with --from: start from the sample at this time [s]");
@@ -132,9 +188,12 @@ void add_branch_command(CLI::App& app, Action& action) {
       "forces, period, multipliers with error bounds, stability, the state, the events), "
       "branch.json (outcome, special points) and case.resolved.toml; plots: "
       "validation/orbits/plot.py DIR. Exit 0: the branch ended as asked (its points, --to, or "
-      "where the orbit's events change); 3: a step failed; 2: bad input.");
-  sub->callback([a, &action] {
+      "where the orbit's events change); 3: a step failed; 4: interrupted (--resume continues it); "
+      "2: bad input.");
+  sub->callback([a, sub, &action] {
     if (a->at && !a->from) throw CLI::ValidationError("--at", "needs --from");
+    for (const char* o : {"--special", "--switch-offset", "--switch-eps"})
+      if (sub->count(o) && !a->switch_dir) throw CLI::ValidationError(o, "needs --switch");
     action = [a] { return branch_command(*a); };
   });
 }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -19,11 +20,16 @@ namespace {
 const std::string kCase = std::string(RUBDYN_SOURCE_DIR) + "/cases/full-rub.toml";
 
 /// The number after "key": in a JSON text (the first occurrence), NaN when absent.
+double number_after(const std::string& text, const std::string& pattern);
 double json_number(const std::string& text, const std::string& key) {
-  const std::string k = "\"" + key + "\": ";
-  const auto p = text.find(k);
+  return number_after(text, "\"" + key + "\": ");
+}
+
+/// The number right after the first `pattern` in a text, NaN when absent.
+double number_after(const std::string& text, const std::string& pattern) {
+  const auto p = text.find(pattern);
   if (p == std::string::npos) return std::nan("");
-  return std::strtod(text.c_str() + p + k.size(), nullptr);
+  return std::strtod(text.c_str() + p + pattern.size(), nullptr);
 }
 
 std::vector<std::vector<std::string>> csv(const std::string& text) {
@@ -176,4 +182,140 @@ TEST_CASE("rubdyn branch: a few points of the full rub's branch, and bad input",
   CHECK(has(b.err, "--vary"));
   CHECK(has(b.err, "--points"));
   CHECK_FALSE(fs::exists(dir));
+}
+
+// --resume continues a branch from its folder's last point, the way it went: its rows kept as
+// they were, the fold reached after the resume located as by a branch in one piece; a resume of
+// a branch that ended changes nothing; another case or method is refused with nothing written.
+TEST_CASE("rubdyn branch --resume: the full rub's branch in two pieces", "[orbit][cli]") {
+  const fs::path dir = fresh_dir("branch-resume");
+  const std::string base =
+      "branch " + sh(kCase) + " --vary initial.omega0 --ds-max 3 --out " + sh(dir.string());
+  const CliOutcome a = cli(base + " --points 10");
+  INFO(a.out << a.err);
+  REQUIRE(a.code == 0);
+  const std::string first = slurp(dir / "branch.csv");
+  const auto rows10 = text_lines(first);
+  REQUIRE(rows10.size() == 11);
+  // (a resume with other tolerances or another monodromy: exit 2, the folder as it was)
+  for (const std::string bad : {" --rtol 1e-9", " --monodromy sensitivities", " --periods 2"}) {
+    const CliOutcome b = cli(base + " --points 70 --resume" + bad);
+    INFO(bad << ": " << b.err);
+    CHECK(b.code == 2);
+    CHECK(slurp(dir / "branch.csv") == first);
+  }
+  const CliOutcome r = cli(base + " --points 200 --resume");
+  INFO(r.out << r.err);
+  REQUIRE(r.code == 0);
+  CHECK(has(r.out, "resumed from its point 9"));
+  const std::string all = slurp(dir / "branch.csv");
+  const auto rows = text_lines(all);
+  // the first ten points' rows (and the header) as the first piece wrote them, byte for byte
+  REQUIRE(rows.size() > 70);
+  for (std::size_t i = 0; i < rows10.size(); ++i) CHECK(rows[i] == rows10[i]);
+  // on the way the first piece went: the speed rises to the fold, and the branch ends as the
+  // one-piece branch does (validation/orbits/branch.md), where the saddle lifts off
+  CHECK(std::stod(csv_fields(rows[11])[1]) > std::stod(csv_fields(rows[10])[1]));
+  const std::string js = slurp(dir / "branch.json");
+  CHECK(has(js, "\"outcome\": \"events_change\""));
+  CHECK(has(js, "\"from\": 1500"));
+  const double fold = number_after(js, "\"kind\": \"fold\", \"value\": ");
+  // The closed form's fold, 1804.5921501041 rad/s (the discriminant of docs/closed-forms.md
+  // (5.2) vanishes: validation/orbits/branch.py, by brentq in Python); the one-piece branch
+  // locates it 3.6e-9 relative away, by the orbits' integration error at rtol 1e-10 (see
+  // test_orbit.cpp's fold test, whose bound 1e-6 relative this takes)
+  CHECK(std::abs(fold / 1804.5921501041 - 1.0) <= 1e-6);
+  // resumed again: it has ended, nothing to do, nothing written
+  const CliOutcome again = cli(base + " --points 200 --resume");
+  CHECK(again.code == 0);
+  CHECK(has(again.out, "nothing to do"));
+  CHECK(slurp(dir / "branch.csv") == all);
+  CHECK(slurp(dir / "branch.json") == js);
+  // a branch.csv whose row 3 (line 4) has a damaged number: refused, naming the file, line and
+  // column, the folder as it was
+  {
+    std::string damaged = all;
+    const auto line4 = damaged.find('\n', damaged.find('\n', damaged.find('\n') + 1) + 1) + 1;
+    const auto comma = damaged.find(',', damaged.find(',', line4) + 1);  // after the key's value
+    damaged.insert(comma, "x");
+    std::ofstream(dir / "branch.csv", std::ios::binary) << damaged;
+    const CliOutcome d = cli(base + " --points 300 --resume");
+    INFO(d.err);
+    CHECK(d.code == 2);
+    CHECK(has(d.err, "branch.csv:4: initial.omega0 = "));
+    CHECK(has(d.err, "must be a number"));
+    CHECK(slurp(dir / "branch.csv") == damaged);
+  }
+  // a folder without a branch
+  const fs::path none = fresh_dir("branch-resume-none");
+  const CliOutcome n =
+      cli("branch " + sh(kCase) + " --vary initial.omega0 --resume --out " + sh(none.string()));
+  CHECK(n.code == 2);
+  CHECK(has(n.err, "branch.json"));
+  CHECK_FALSE(fs::exists(none));
+  fs::remove_all(dir);
+  fs::remove_all(none);
+}
+
+// --switch: the frictionless impact oscillator (a Jeffcott rotor on a soft shaft against a rigid
+// ring, e_N = 0.8, at a prescribed speed; tests/unit/test_orbit_determinant.cpp's scene) has a
+// period doubling below 250 rad/s; the branch of twice the period leaves it, on the side where
+// the period-1 orbit is unstable.
+TEST_CASE("rubdyn branch --switch: the period-2 orbits at the impact oscillator's doubling",
+          "[orbit][cli]") {
+  const fs::path dir = fresh_dir("branch-switch");
+  fs::create_directories(dir);
+  const std::string case_path = (dir / "io.toml").string();
+  {
+    std::ofstream f(case_path);
+    f << "name = \"impact-oscillator\"\n[model]\nkind = \"jeffcott\"\n"
+         "[rotor]\nmass = 5.0\nk = 5e5\nc = 300.0\nradius = 0.05\nJp = 0.06\n"
+         "[contact]\nmu = 0.0\ne_n = 0.8\ne_t = 0.0\n"
+         "[loads]\ngravity = 9.81\nspin = \"prescribed\"\nspin_accel = 0.0\nunbalance = 4e-4\n"
+         "unbalance_phase = 0.3\n[initial]\nomega0 = 250.0\n[run]\nt_end = 1.0\n"
+         "omega_lim = 2000.0\n[output]\ndt = 1e-4\n[stator]\nrigid = true\ngap = 2e-4\n"
+         "[solver]\nkind = \"event\"\nrtol = 1e-10\natol = 1e-13\n";
+  }
+  const std::string run = (dir / "run").string(), one = (dir / "one").string(),
+                    two = (dir / "two").string();
+  // 40 periods of transient (1 s: it decays at c / 2m = 30 1/s) leave Newton a start
+  REQUIRE(cli("run " + sh(case_path) + " --out " + sh(run)).code == 0);
+  const std::string common = "branch " + sh(case_path) + " --from " + sh(run) +
+                             " --vary initial.omega0 --scale 2.5 --ds 0.5 --ds-max 2";
+  const CliOutcome a = cli(common + " --down --points 8 --out " + sh(one));
+  INFO(a.out << a.err);
+  REQUIRE(a.code == 0);
+  const std::string js1 = slurp(fs::path(one) / "branch.json");
+  const double pd = number_after(js1, "\"kind\": \"period_doubling\", \"value\": ");
+  REQUIRE(std::isfinite(pd));
+  CHECK(has(js1, "\"direction\": {"));
+  // without the run's state (another case: the forcing's phase at the section differs): refused
+  const CliOutcome bad = cli("branch " + sh(case_path) + " --vary initial.omega0 --switch " +
+                             sh(one) + " --out " + sh(two));
+  CHECK(bad.code == 2);
+  CHECK(has(bad.err, "case.resolved.toml"));
+  CHECK_FALSE(fs::exists(two));
+  const CliOutcome b = cli(common + " --switch " + sh(one) + " --points 3 --out " + sh(two));
+  INFO(b.out << b.err);
+  REQUIRE(b.code == 0);
+  CHECK(has(b.out, "switched at the period doubling"));
+  const std::string js2 = slurp(fs::path(two) / "branch.json");
+  CHECK(has(js2, "\"periods\": 2"));
+  const auto rows = text_lines(slurp(fs::path(two) / "branch.csv"));
+  REQUIRE(rows.size() >= 2);
+  const auto head = csv_fields(rows[0]);
+  const auto col = [&](const std::string& name) {
+    const auto it = std::find(head.begin(), head.end(), name);
+    REQUIRE(it != head.end());
+    return static_cast<std::size_t>(it - head.begin());
+  };
+  const auto p0 = csv_fields(rows[1]);
+  const double w = std::stod(p0[1]);
+  // below the doubling (the period-1 orbit's multiplier is below -1 there: a supercritical
+  // doubling's side), with twice the forcing's period, two impacts in it and stable
+  CHECK(w < pd);
+  CHECK(std::stod(p0[col("period")]) == Approx(4 * M_PI / w).epsilon(1e-14));
+  CHECK(p0.back() == "\"free | impact impact | free\"");  // (the csv quotes it)
+  CHECK(p0[col("stability")] == "stable");
+  fs::remove_all(dir);
 }

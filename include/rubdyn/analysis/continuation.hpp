@@ -56,6 +56,15 @@ struct ContinuationOptions {
   int direction = +1;     ///< the sign of the first step in lambda
   int max_corrector = 8;  ///< corrector iterations per step
   OrbitOptions orbit;     ///< tol, the monodromy's steps, samples of each point's orbit
+  /// The first point's section time (NaN: the family's t0) and, for an autonomous orbit, the
+  /// guess of its period (NaN: the family's): a branch continued from a point of another run.
+  double t0 = std::numeric_limits<double>::quiet_NaN();
+  double period = std::numeric_limits<double>::quiet_NaN();
+  /// A point before the first one on the same branch (its state at the section t0, its period
+  /// and parameter): the first tangent is oriented along the secant from it instead of by
+  /// `direction` (a resumed branch goes on the way it went, through a fold too). Empty: none.
+  Vec previous_x;
+  double previous_period = 0.0, previous_lambda = 0.0;
 };
 
 /// One point of a branch.
@@ -123,6 +132,9 @@ struct Branch {
   };
   std::vector<SectionMove> section_moves;
 };
+
+/// The real multipliers below -1 (their count changes by an odd number at a period doubling).
+int real_multipliers_below_minus_one(const FloquetAnalysis& f);
 
 /// Follows the orbit from the guess x_guess at lambda0 (Newton there first): a forced orbit, or an
 /// autonomous one where the family says so (ParameterModel::autonomous: its period an unknown).

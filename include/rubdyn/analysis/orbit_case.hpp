@@ -6,6 +6,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "rubdyn/analysis/continuation.hpp"
@@ -74,6 +75,8 @@ std::unique_ptr<HeldFolder> open_orbit_folder(const std::string& dir, const Case
 /// OutputError naming the file that could not be written.
 void write_orbit_files(const HeldFolder& folder, const CaseSpec& spec, const CaseOrbit& o);
 
+struct CaseBranch;
+
 /// A branch of forced orbits of a case in one of its numeric keys (rubdyn branch).
 struct CaseBranchOptions {
   std::string key;  ///< the case key varied, e.g. "initial.omega0"
@@ -83,10 +86,26 @@ struct CaseBranchOptions {
   double scale = 0.0;  ///< the key's unit in the arclength (0: 1 % of its value, or 1)
   int direction = +1;  ///< the first step's sign in the key
   CaseOrbitOptions orbit;
+  /// Continue this earlier branch of the same case (read_case_branch) from its last point, to
+  /// `points` points in all (its points kept as they are, the new ones appended; a branch that
+  /// ended, by a bound or where its events change, or has its points already, is returned as
+  /// it is). nullptr: a new branch.
+  const CaseBranch* resume = nullptr;
+  /// Branch switching: the branch of period 2k (k: this earlier branch's periods) that leaves
+  /// its period doubling `special` (an index of its specials; -1: its first period doubling),
+  /// from the doubling's orbit moved by `switch_eps` (scaled state) along its multiplier -1's
+  /// direction, at `switch_offset` from the doubling in the key (NaN: half the distance of the
+  /// two points around it), on the side where the period-1 orbit has a real multiplier below -1
+  /// first, then the other; the branch goes on away from the doubling. nullptr: none.
+  const CaseBranch* switch_from = nullptr;
+  int special = -1;
+  double switch_offset = std::numeric_limits<double>::quiet_NaN();
+  double switch_eps = 0.05;
 };
 
 /// Every reason the case and options cannot give a branch (orbit_issues, a forced orbit, the key a
-/// number of the case, points >= 2, ds > 0, ...).
+/// number of the case, points >= 2, ds > 0; a resumed or switched-from branch of this key and
+/// model, ...).
 std::vector<CaseIssue> branch_issues(const CaseSpec& spec, const CaseBranchOptions& o);
 
 struct CaseBranch {
@@ -96,17 +115,32 @@ struct CaseBranch {
   std::string monodromy;                 ///< how the points' monodromies were computed
   std::vector<std::string> state_names;  ///< the orbit state's coordinates and rates
   Branch branch;
+  /// How the branch started: "" (from the case's state), or a sentence (resumed from a folder,
+  /// switched at a period doubling: where, from which orbit)
+  std::string started;
+  /// A resumed branch that had ended (by a bound, where its events change) or has its points
+  /// already: nothing was run, and it is as it was read
+  bool nothing_to_resume = false;
 };
 
-/// Follows the case's forced orbit in o.key from its value in the case, re-reading the case from
-/// `text` (the file's text, `source` its name) with `overrides` and key = value at every value.
-/// Throws CaseError on bad input.
+/// Follows the case's forced (or autonomous) orbit in o.key from its value in the case (or
+/// resumes, or switches at a period doubling: o.resume, o.switch_from), re-reading the case
+/// from `text` (the file's text, `source` its name) with `overrides` and key = value at every
+/// value. Throws CaseError on bad input.
 CaseBranch find_case_branch(const std::string& text, const std::string& source,
                             const std::vector<std::string>& overrides, const CaseBranchOptions& o);
 
+/// A branch as branch_json and branch_csv wrote it (`source`: their folder, named in errors):
+/// the key, periods, method, outcome, specials (with a period doubling's state and direction),
+/// section moves, runs, wall time; every point's row (its multipliers' values and bounds and
+/// stability, without the monodromy matrix). Throws CaseError naming the file, line and key of
+/// what is missing or malformed.
+CaseBranch read_case_branch(std::string_view json, std::string_view csv, const std::string& source);
+
 /// branch.csv: one row per point (the key's value, arclength, period, the orbit's amplitude and
 /// normal forces, residual, stability, each multiplier's re, im, abs and error, the corrector's
-/// iterations, runs, the state at the section by name, the event signature).
+/// iterations, runs, the section time, d key / ds, the state at the section by name, the event
+/// signature).
 std::string branch_csv(const CaseBranch& b);
 /// branch.json: the key, outcome, message, special points (kind, value, between which points,
 /// how located), points, runs, wall time.
