@@ -90,6 +90,7 @@ struct Eval {
   bool ok = false;
   std::string why;
   bool penetrates = false;  // the state lies inside a stator (beyond a grazing): not run
+  bool refused = false;     // the model refuses the parameter's value (a bound of the key)
   FlowRun run;
   std::string signature;  // the run's events (event_signature)
   Vec G;                  // coords(P(x)) - coords(x)
@@ -103,6 +104,7 @@ Eval evaluate(const ModelFamily& family, const SectionChart& chart, VecIn xi, do
     pm = family(lambda);
   } catch (const std::exception& ex) {
     e.why = fmt::format("the model at {:.10g}: {}", lambda, ex.what());
+    e.refused = true;
     return e;
   }
   Vec x;
@@ -307,12 +309,25 @@ bool make_point(const ModelFamily& family, double lambda, VecIn x, const Continu
     why = "the monodromy at " + fmt::format("{:.10g}", lambda) + ": " + m.failure;
     return false;
   }
-  // G_lambda by central differences at the same state (and period)
+  // G_lambda by central differences at the same state (and period); next to a value the model
+  // refuses (a key's bound, mu >= 0) by the one-sided second-order difference away from it
   const double Tg = pm.autonomous ? period : std::numeric_limits<double>::quiet_NaN();
   const double h = kLambdaStep * opt.lambda_scale;
   const Eval ep = evaluate(family, chart, zero, lambda + h, runs, Tg);
   const Eval em = evaluate(family, chart, zero, lambda - h, runs, Tg);
-  if (!ep.ok || !em.ok) {
+  Vec G_lambda;
+  if (ep.ok && em.ok) {
+    G_lambda = (ep.G - em.G) / (2.0 * h);
+  } else if (ep.refused != em.refused && (ep.ok || em.ok)) {
+    const double side = em.refused ? 1.0 : -1.0;
+    const Eval e2 = evaluate(family, chart, zero, lambda + 2.0 * side * h, runs, Tg);
+    if (!e2.ok) {
+      why = "G_lambda: " + e2.why;
+      return false;
+    }
+    const Vec G0 = chart.coords(stacked_state(run.samples.back()));  // (coords(xs) = 0)
+    G_lambda = side * (-3.0 * G0 + 4.0 * (em.refused ? ep.G : em.G) - e2.G) / (2.0 * h);
+  } else {
     why = "G_lambda: " + (ep.ok ? em.why : ep.why);
     return false;
   }
@@ -333,7 +348,7 @@ bool make_point(const ModelFamily& family, double lambda, VecIn x, const Continu
     }
     out.J.col(d - 1) = (tp.G - tm.G) / (2.0 * hT);
   }
-  out.J.col(d) = (ep.G - em.G) / (2.0 * h) * opt.lambda_scale;
+  out.J.col(d) = G_lambda * opt.lambda_scale;
   const Eigen::JacobiSVD<Mat> svd(out.J, Eigen::ComputeFullV);
   out.t = svd.matrixV().col(d);
   // the sampled period: amplitude and forces
@@ -866,6 +881,20 @@ Branch continue_forced_orbit(const ModelFamily& family, double lambda0, VecIn x_
         locate_end(pts, sp);
         b.specials.push_back(sp);
         return done("events_change", sp.how);
+      }
+      if (ds < opt.ds_min) {
+        // the last step's predictor beyond a bound of the branch (where the model may refuse the
+        // value: mu < 0): the branch ends there as asked, it does not fail
+        const int d = cur.chart->dim();
+        const double predicted =
+            (pack(cur, cur.p.x0, cur.p.period, cur.p.lambda, opt.lambda_scale)(d) +
+             2.0 * ds * cur.t(d)) *
+            opt.lambda_scale;
+        if (predicted < opt.lambda_min || predicted > opt.lambda_max)
+          return done("lambda_bound",
+                      fmt::format("the last point, at {:.10g}, is within the smallest step of "
+                                  "the bound [{:.10g}, {:.10g}] (a step across it: {})",
+                                  cur.p.lambda, opt.lambda_min, opt.lambda_max, why));
       }
       if (ds < opt.ds_min) {
         // where the last points head for a switching surface (a grazing impact, whose

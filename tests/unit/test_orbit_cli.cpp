@@ -319,3 +319,27 @@ TEST_CASE("rubdyn branch --switch: the period-2 orbits at the impact oscillator'
   CHECK(p0[col("stability")] == "stable");
   fs::remove_all(dir);
 }
+
+// A key with a bound (mu >= 0): the branch follows the full rub down to the frictionless orbit
+// and ends at the bound as asked (exit 0), its last point's derivative in mu taken one-sided
+// where mu - h is refused (before: G_lambda failed next to 0, exit 3).
+TEST_CASE("rubdyn branch: down to a key's bound (contact.mu to 0)", "[orbit][cli]") {
+  const fs::path dir = fresh_dir("branch-bound");
+  const CliOutcome r =
+      cli("branch " + sh(kCase) + " --vary contact.mu --down --to 0 --points 100 --out " +
+          sh(dir.string()));
+  INFO(r.out << r.err);
+  REQUIRE(r.code == 0);
+  const std::string js = slurp(dir / "branch.json");
+  CHECK(has(js, "\"outcome\": \"lambda_bound\""));
+  const auto rows = text_lines(slurp(dir / "branch.csv"));
+  REQUIRE(rows.size() > 3);
+  const auto last = csv_fields(rows.back());
+  // within the smallest step (ds_min 1e-3 of the scale, 1e-3 here: 1e-6) of 0, up to its
+  // predictor's factor 2, and every point a smooth sliding orbit (no events)
+  CHECK(std::stod(last[1]) >= 0.0);
+  CHECK(std::stod(last[1]) <= 1e-5);
+  for (std::size_t i = 1; i < rows.size(); ++i)
+    CHECK(csv_fields(rows[i]).back() == "\"slip- | | slip-\"");
+  fs::remove_all(dir);
+}

@@ -80,12 +80,13 @@ def read_grid(folder, names, T, kmax):
     return np.array([want[k] for k in range(kmax + 1)])
 
 
-def transient(cli, out, o, x, T, kmax):
-    """A run at rtol 1e-12 from the orbit's section state x (scaled, by name), theta at t0."""
+def transient(cli, out, o, x, T, kmax, extra=()):
+    """A run at rtol 1e-12 from the orbit's section state x (scaled, by name), theta at t0, with
+    the case overrides `extra`."""
     names = list(o["state"].keys())
     sets = [f"initial.{n}={x[i] * scale(n)!r}" for i, n in enumerate(names)]
     sets += [f"initial.theta={OMEGA * o['t0']!r}", f"run.t_end={kmax * T + 1e-9!r}",
-             f"output.dt={T / 10!r}", "solver.rtol=1e-12", "solver.atol=1e-15"]
+             f"output.dt={T / 10!r}", "solver.rtol=1e-12", "solver.atol=1e-15", *extra]
     cmd = [cli, "run", CASE, "--out", out, "--quiet"]
     for s in sets:
         cmd += ["--set", s]
