@@ -280,6 +280,17 @@ void RingChart::embed(std::span<const Phase> modes, const RingAnchor& anchor, do
 
 void RingChart::embed(std::span<const Phase> modes, const Plan& pl, const RingAnchor& anchor,
                       double t, VecIn p, VecIn pd, VecOut q, VecOut v) const {
+  embed_impl(modes, pl, anchor, t, p, pd, q, v, false);
+}
+
+void RingChart::embed_tangent(std::span<const Phase> modes, const Plan& pl,
+                              const RingAnchor& anchor, double t, VecIn p, VecIn x, VecOut q,
+                              VecOut v) const {
+  embed_impl(modes, pl, anchor, t, p, x, q, v, true);
+}
+
+void RingChart::embed_impl(std::span<const Phase> modes, const Plan& pl, const RingAnchor& anchor,
+                           double t, VecIn p, VecIn pd, VecOut q, VecOut v, bool tangent) const {
   RUBDYN_DEMAND(pl.ok && std::equal(modes.begin(), modes.end(), pl.modes.begin()));
   const bool stick = any_stick(modes);
   int j = 0;
@@ -304,7 +315,8 @@ void RingChart::embed(std::span<const Phase> modes, const Plan& pl, const RingAn
       const double ratio = c.radius / c.gap;
       const double turned = spin_ >= 0 ? q[spin_] - anchor.theta0 : law_->advance(anchor.t0, t);
       phi[ku] = anchor.phi0[ku] - ratio * turned;
-      phid[ku] = -ratio * (spin_ >= 0 ? v[spin_] : law_->omega(t));
+      // (the prescribed spin's rate is no function of p': no term of the tangent map)
+      phid[ku] = -ratio * (spin_ >= 0 ? v[spin_] : (tangent ? 0.0 : law_->omega(t)));
     } else {
       phi[ku] = p[j];
       phid[ku] = pd[j];

@@ -122,6 +122,7 @@ class Engine {
     if (chart_) {
       SessionSettings sr = s;
       sr.adams = contact_adams_;
+      sr.dense_reduced_newton = opt_.dense_reduced_newton;
       reduced_.resize(static_cast<std::size_t>(2 * K_ + 1));
       for (int r = 1; r <= 2 * K_ && r < n_; ++r)
         reduced_[static_cast<std::size_t>(r)] =

@@ -34,6 +34,13 @@ class PhaseChart {
   /// p'' of a full acceleration a that satisfies the constraints at acceleration level, at the
   /// embedded state q.
   virtual void reduce(VecIn p, VecIn pd, VecIn q, VecIn a, VecOut pdd) const = 0;
+  /// The chart's tangent map at p (time t) of the phase begun last: v = T x with T = dq/dp, the
+  /// rates embed gives for p' = x without what a rheonomic constraint adds (a sticking contact
+  /// at a prescribed spin: no function of p'); q: the embedded position (written).
+  virtual void tangent(double t, VecIn p, VecIn x, VecOut q, VecOut v) const = 0;
+  /// The linear part of reduce at the embedded state q: out = L y for a full vector y, L the
+  /// left inverse of T that reduce applies (L T = I).
+  virtual void reduce_linear(VecIn p, VecIn pd, VecIn q, VecIn y, VecOut out) const = 0;
   /// A chart of its own for another session (each keeps its phase's anchor).
   virtual std::unique_ptr<PhaseChart> clone() const = 0;
 };

@@ -110,8 +110,10 @@ PhaseSession::PhaseSession(const PhaseContext& ctx, const SessionSettings& s, Se
   c.atol = atol_.data();
   c.max_steps = s.max_steps;
   CvodeCallbacks cb;
-  const bool newton =
-      kind == SessionKind::Projected || (kind == SessionKind::Free && !c.fixed_point);
+  const bool reduced_newton =
+      kind == SessionKind::Reduced && !c.fixed_point && !s.dense_reduced_newton;
+  const bool newton = kind == SessionKind::Projected ||
+                      (kind == SessionKind::Free && !c.fixed_point) || reduced_newton;
   if (newton) {
     // the structured Newton systems' workspaces (lsys_free, lsys_projected)
     rhs_n_.setZero(n_);
@@ -140,16 +142,31 @@ PhaseSession::PhaseSession(const PhaseContext& ctx, const SessionSettings& s, Se
       cb.proj = &PhaseSession::proj;
       cb.lsys = &PhaseSession::lsys_projected;
       cb.lsolve = &PhaseSession::lsolve_projected;
-      jac_eval_ = std::make_unique<PhaseEval>(m_, K_);
-      Wf_.setZero(n_, 2 * K_);
-      Ht_.setZero(n_, 2 * K_);
-      Y_.setZero(n_, 2 * K_);
-      E_.setZero(2 * K_, 2 * K_);
-      E_lu_.compute(E_);  // (sized here)
-      res_.setZero(2 * K_);
-      mu_.setZero(2 * K_);
       break;
-    case SessionKind::Reduced: cb.rhs = &PhaseSession::rhs_reduced; break;
+    case SessionKind::Reduced:
+      cb.rhs = &PhaseSession::rhs_reduced;
+      if (reduced_newton) {
+        cb.lsys = &PhaseSession::lsys_reduced;
+        cb.lsolve = &PhaseSession::lsolve_reduced;
+        p_jac_.setZero(dim_);
+        pd_jac_.setZero(dim_);
+        x_red_.setZero(dim_);
+        y_jac_.setZero(2 * n_);
+        b_full_.setZero(2 * n_);
+        q_tan_.setZero(n_);
+      }
+      break;
+  }
+  if (kind == SessionKind::Projected || reduced_newton) {
+    // the bordered Newton systems' workspaces (lsys_projected, lsys_reduced)
+    jac_eval_ = std::make_unique<PhaseEval>(m_, K_);
+    Wf_.setZero(n_, 2 * K_);
+    Ht_.setZero(n_, 2 * K_);
+    Y_.setZero(n_, 2 * K_);
+    E_.setZero(2 * K_, 2 * K_);
+    E_lu_.compute(E_);  // (sized here)
+    res_.setZero(2 * K_);
+    mu_.setZero(2 * K_);
   }
   cb.roots = &PhaseSession::roots;
   cb.user = this;
@@ -361,67 +378,110 @@ int PhaseSession::lsolve_free(const double* b, double* x, void* user) {
   return all_finite(self->dv_) ? 0 : 1;
 }
 
-int PhaseSession::lsys_projected(double t, const double* y, double gamma, int jok, int* jcur,
-                                 void* user) {
-  auto* self = static_cast<PhaseSession*>(user);
-  const int n = self->n_;
-  const PhaseContext& ctx = self->ctx_;
-  if (!jok) {
-    const CMap q(y, n), v(y + n, n);
-    PhaseEval& e = *self->jac_eval_;
-    if (!e.dynamics(t, q, v, ctx.modes, ctx.laws))
-      return 1;  // recoverable: CVODE retries with a smaller step
-    self->free_jacobians(t, y, &e.a());
-    int mc = 0;
-    for (int k = 0; k < self->K_; ++k) {
-      const Phase p = ctx.modes[k];
-      if (!closed(p)) continue;
-      const ContactKinematics& c = e.c(k);
-      self->Ht_.col(mc) = c.W_N;
-      self->Wf_.col(mc) = c.W_N;
-      if (slipping(p)) self->Wf_.col(mc) -= (ctx.law(k).mu * slip_sign(p)) * c.W_T;
+bool PhaseSession::constrained_jacobians(double t, const double* y) {
+  const int n = n_;
+  const PhaseContext& ctx = ctx_;
+  const CMap q(y, n), v(y + n, n);
+  PhaseEval& e = *jac_eval_;
+  if (!e.dynamics(t, q, v, ctx.modes, ctx.laws)) return false;
+  free_jacobians(t, y, &e.a());
+  int mc = 0;
+  for (int k = 0; k < K_; ++k) {
+    const Phase p = ctx.modes[k];
+    if (!closed(p)) continue;
+    const ContactKinematics& c = e.c(k);
+    Ht_.col(mc) = c.W_N;
+    Wf_.col(mc) = c.W_N;
+    if (slipping(p)) Wf_.col(mc) -= (ctx.law(k).mu * slip_sign(p)) * c.W_T;
+    ++mc;
+    if (p == Phase::Stick) {
+      Ht_.col(mc) = c.W_T;
+      Wf_.col(mc) = c.W_T;
       ++mc;
-      if (p == Phase::Stick) {
-        self->Ht_.col(mc) = c.W_T;
-        self->Wf_.col(mc) = c.W_T;
-        ++mc;
-      }
     }
-    self->mc_ = mc;
   }
-  *jcur = jok ? 0 : 1;
-  self->gamma_ = gamma;
-  if (!self->factor_newton(gamma)) return 1;
-  const int mc = self->mc_;
-  if (mc == 0) return 0;
-  for (int j = 0; j < mc; ++j) self->band_->solve(self->Wf_.col(j).data(), self->Y_.col(j).data());
-  self->E_.resize(mc, mc);
-  self->E_.noalias() = self->Ht_.leftCols(mc).transpose() * self->Y_.leftCols(mc);
-  if (!self->E_.allFinite()) return 1;
+  mc_ = mc;
+  return true;
+}
+
+bool PhaseSession::factor_bordered(double gamma) {
+  gamma_ = gamma;
+  if (!factor_newton(gamma)) return false;
+  const int mc = mc_;
+  if (mc == 0) return true;
+  for (int j = 0; j < mc; ++j) band_->solve(Wf_.col(j).data(), Y_.col(j).data());
+  E_.resize(mc, mc);
+  E_.noalias() = Ht_.leftCols(mc).transpose() * Y_.leftCols(mc);
+  if (!E_.allFinite()) return false;
   // rank-revealing: redundant constraints (a rod's two ends on one line) make E singular but
   // their right-hand sides consistent, and any solution gives the same x_v (as the contact
   // problem's minimum-norm forces give the same motion)
-  self->E_lu_.compute(self->E_);
-  return self->E_lu_.rank() > 0 ? 0 : 1;
+  E_lu_.compute(E_);
+  return E_lu_.rank() > 0;
+}
+
+void PhaseSession::solve_bordered(const double* b) {
+  const int n = n_;
+  const int mc = mc_;
+  newton_velocities(b);
+  if (mc > 0) {
+    // mu = (H S^-1 W_f)^-1 (H b_v - H x0), x_v = x0 + S^-1 W_f mu
+    const CMap bv(b + n, n);
+    res_.resize(mc);
+    for (int j = 0; j < mc; ++j) res_[j] = Ht_.col(j).dot(bv - dv_);
+    mu_ = E_lu_.solve(res_);
+    dv_.noalias() += Y_.leftCols(mc) * mu_;
+  }
+}
+
+int PhaseSession::lsys_projected(double t, const double* y, double gamma, int jok, int* jcur,
+                                 void* user) {
+  auto* self = static_cast<PhaseSession*>(user);
+  if (!jok && !self->constrained_jacobians(t, y))
+    return 1;  // recoverable: CVODE retries with a smaller step
+  *jcur = jok ? 0 : 1;
+  return self->factor_bordered(gamma) ? 0 : 1;
 }
 
 int PhaseSession::lsolve_projected(const double* b, double* x, void* user) {
   auto* self = static_cast<PhaseSession*>(user);
   const int n = self->n_;
-  const int mc = self->mc_;
-  self->newton_velocities(b);
-  if (mc > 0) {
-    // mu = (H S^-1 W_f)^-1 (H b_v - H x0), x_v = x0 + S^-1 W_f mu
-    const CMap bv(b + n, n);
-    self->res_.resize(mc);
-    for (int j = 0; j < mc; ++j) self->res_[j] = self->Ht_.col(j).dot(bv - self->dv_);
-    self->mu_ = self->E_lu_.solve(self->res_);
-    self->dv_.noalias() += self->Y_.leftCols(mc) * self->mu_;
-  }
+  self->solve_bordered(b);
   VMap(x, n) = CMap(b, n) + self->gamma_ * self->dv_;
   VMap(x + n, n) = self->dv_;
   for (int i = 2 * n; i < 2 * n + kNw; ++i) x[i] = b[i];
   return all_finite(self->dv_) ? 0 : 1;
+}
+
+int PhaseSession::lsys_reduced(double t, const double* y, double gamma, int jok, int* jcur,
+                               void* user) {
+  auto* self = static_cast<PhaseSession*>(user);
+  const int d = self->dim_, n = self->n_;
+  if (!jok) {
+    self->t_jac_ = t;
+    self->p_jac_ = CMap(y, d);
+    self->pd_jac_ = CMap(y + d, d);
+    self->chart_->embed(t, self->p_jac_, self->pd_jac_, self->y_jac_.head(n), self->y_jac_.tail(n));
+    if (!self->constrained_jacobians(t, self->y_jac_.data()))
+      return 1;  // recoverable: CVODE retries with a smaller step
+  }
+  *jcur = jok ? 0 : 1;
+  return self->factor_bordered(gamma) ? 0 : 1;
+}
+
+int PhaseSession::lsolve_reduced(const double* b, double* x, void* user) {
+  auto* self = static_cast<PhaseSession*>(user);
+  const int d = self->dim_, n = self->n_;
+  const PhaseChart& chart = *self->chart_;
+  // (b_q, b_v) = (T b_p, T b_p') at the Jacobian's p
+  chart.tangent(self->t_jac_, self->p_jac_, CMap(b, d), self->q_tan_, self->b_full_.head(n));
+  chart.tangent(self->t_jac_, self->p_jac_, CMap(b + d, d), self->q_tan_, self->b_full_.tail(n));
+  self->solve_bordered(self->b_full_.data());
+  chart.reduce_linear(self->p_jac_, self->pd_jac_, self->y_jac_.head(n), self->dv_, self->x_red_);
+  VMap(x, d) = CMap(b, d) + self->gamma_ * self->x_red_;
+  VMap(x + d, d) = self->x_red_;
+  for (int i = 2 * d; i < 2 * d + kNw; ++i) x[i] = b[i];
+  return all_finite(self->x_red_) ? 0 : 1;
 }
 
 int PhaseSession::rhs_projected(double t, const double* y, double* yd, void* user) {

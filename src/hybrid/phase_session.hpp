@@ -9,7 +9,9 @@
 //              v_t,k = 0 in stick); its Newton systems free flight's, bordered by the closed
 //              contacts' constraints (lsys_projected)
 //   Reduced    a contact phase in minimal coordinates (phase_chart.hpp) of one dimension: every
-//              mode tuple whose chart has it; the constraints hold by construction
+//              mode tuple whose chart has it; the constraints hold by construction; with
+//              Newton, its systems the Projected session's, lifted by the chart's tangent map
+//              (lsys_reduced)
 // A session state is the mechanical part ((q, v) or (p, p')) followed by the kNw works of the
 // applied loads, the dampers and friction, integrated with the state and error-controlled like
 // it. The witnesses of the running phase (the engine's list, contact_modes.hpp) are evaluated
@@ -44,6 +46,9 @@ struct SessionSettings {
   double g0 = 1.0;        ///< the gap's scale [m] (angles of reduced coordinates)
   bool adams = true;      ///< Adams (else BDF); a Projected session is always BDF
   bool fixed_point = true;
+  /// A Reduced session's Newton systems by CVODE's dense difference quotients (the reference of
+  /// tests/events/test_structured_newton.cpp) instead of the structured solve (lsys_reduced).
+  bool dense_reduced_newton = false;
   long max_steps = 10'000'000;
 };
 
@@ -126,6 +131,20 @@ class PhaseSession {
   static int lsys_projected(double t, const double* y, double gamma, int jok, int* jcur,
                             void* user);
   static int lsolve_projected(const double* b, double* x, void* user);
+  // A Reduced session's Newton systems (BDF, or Adams with Newton), user = this session. The
+  // chart's q = Q(p), v = T(p) p' (+ a rheonomic term), T = dQ/dp, and p'' = L a (L T = I)
+  // for the constrained acceleration a of the full model at the embedded state. With T, L and
+  // the constrained a's Jacobian held as in lsys_projected (W_f, H, wdot fixed; and T, L at
+  // the Jacobian's p: the terms dropped are T's and L's derivatives, acting on the angles and
+  // the contact's coordinates only), the reduced Jacobian is [[0, I], [L A_q T, L A_v T]]
+  // with A_x the constrained acceleration's. Since T L is the identity on H's null space,
+  // where A_x's values lie, y = T x_p' solves the Projected session's bordered system with
+  // b_q = T b_p, b_v = T b_p' (H T = 0: its second row is H y = 0):
+  //   [S  -W_f] [y ]   [M T b_p' + gamma (df/dq - d(M a)/dq) T b_p]
+  //   [H    0 ] [mu] = [0                                          ],
+  // x_p' = L y, x_p = b_p + gamma x_p': S banded where the model is, no dense 2n system.
+  static int lsys_reduced(double t, const double* y, double gamma, int jok, int* jcur, void* user);
+  static int lsolve_reduced(const double* b, double* x, void* user);
   /// The absolute tolerances of the session's state (p, p', works) as CVODE weighs it (a chart
   /// session's: since its last restart).
   std::span<const double> absolute_tolerances() const { return atol_; }
@@ -151,6 +170,14 @@ class PhaseSession {
   bool factor_newton(double gamma);
   /// dv_ = S^-1 (M b_v + gamma (df/dq - d(M a)/dq) b_q), b = (b_q, b_v, ...).
   void newton_velocities(const double* b);
+  /// The constrained Jacobian's blocks at the full state y = (q, v): free_jacobians at the
+  /// constrained acceleration, W_f and H^T of the closed contacts (lsys_projected). False: the
+  /// closed set is singular.
+  bool constrained_jacobians(double t, const double* y);
+  /// Factors S and the Schur complement H S^-1 W_f for gamma (lsys_projected).
+  bool factor_bordered(double gamma);
+  /// dv_ = x_v of the bordered system with b = (b_q, b_v, ...) (lsolve_projected).
+  void solve_bordered(const double* b);
   void powers(double t, VecIn q, VecIn v, const PhaseEval& e, double* w) const;
   static int rhs_free(double t, const double* y, double* yd, void* user);
   static int rhs_projected(double t, const double* y, double* yd, void* user);
@@ -192,6 +219,10 @@ class PhaseSession {
   SmallMat E_;
   Eigen::FullPivLU<SmallMat> E_lu_;
   SmallVec res_, mu_;
+  // a Reduced session's Newton systems (lsys_reduced): the Jacobian's time, p, p' and full
+  // state (q, v), the lifted right-hand side (T b_p, T b_p'), scratch
+  double t_jac_ = 0.0;
+  Vec p_jac_, pd_jac_, y_jac_, b_full_, q_tan_, x_red_;
   std::unique_ptr<CvodeSession> session_;
 };
 

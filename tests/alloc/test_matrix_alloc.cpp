@@ -9,6 +9,9 @@
 
 #include "alloc/run_allocations.hpp"
 #include "rubdyn/hybrid/event_driven.hpp"
+#include "rubdyn/io/case_io.hpp"
+#include "rubdyn/io/model_registry.hpp"
+#include "rubdyn/io/solver_options.hpp"
 #include "rubdyn/model/matrix_model.hpp"
 #include "rubdyn/stepping/fixed_step.hpp"
 
@@ -73,4 +76,16 @@ TEST_CASE("No allocation per step: the matrices model at rest on the stator and 
   bdf.method = MultistepMethod::BDF;
   event_allocations(spin, s1, bdf, 0.01, 0.02);
   fixed_step_allocations(spin, s1, kEveryScheme, step_options(1e-5), 0.01, 0.02);
+}
+
+TEST_CASE("No allocation per step: the FE run-up's slip phase in minimal coordinates by BDF",
+          "[alloc]") {
+  // cases/fe-runup.toml's seal slides from 0.1535 s to the end: its Reduced session's
+  // structured Newton systems (phase_session.cpp, lsys_reduced, lsolve_reduced) lift through
+  // the ring chart, solve and reduce in place at every Newton iteration from 0.17 to 0.19 s
+  const CaseSpec c = load_case(RUBDYN_SOURCE_DIR "/cases/fe-runup.toml");
+  const auto m = build_model(c);
+  EventDrivenOptions o = event_driven_options(c);
+  o.contact_phases = ContactFormulation::Reduced;
+  event_allocations(*m, initial_state(c), o, 0.17, 0.19);
 }

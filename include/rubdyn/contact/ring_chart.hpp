@@ -139,12 +139,20 @@ class RingChart {
   void embed(std::span<const Phase> modes, const Plan& pl, const RingAnchor& anchor, double t,
              VecIn p, VecIn pd, VecOut q, VecOut v) const;
   void reduce(std::span<const Phase> modes, const Plan& pl, VecIn q, VecIn a, VecOut pdd) const;
+  /// The chart's tangent map at p: v = T x with T = dq/dp (the rates embed gives for p' = x
+  /// without the prescribed spin's term of a sticking contact, which does not depend on p');
+  /// q = the embedded position. reduce is its left inverse on the constraints' tangent space.
+  void embed_tangent(std::span<const Phase> modes, const Plan& pl, const RingAnchor& anchor,
+                     double t, VecIn p, VecIn x, VecOut q, VecOut v) const;
   /// `copies` (empty, or one per reduced coordinate): the full coordinate each copy copies, -1
   /// for the angles (ChartScales::copies).
   void lengths(std::span<const Phase> modes, const Plan& pl, std::span<double> L,
                std::span<int> copies = {}) const;
 
  private:
+  /// embed (tangent false) or embed_tangent (true).
+  void embed_impl(std::span<const Phase> modes, const Plan& pl, const RingAnchor& anchor, double t,
+                  VecIn p, VecIn pd, VecOut q, VecOut v, bool tangent) const;
   /// The pivots of the fixed rings' x (or y: use_y) equations; false if rank-deficient.
   bool choose_pivots(const Plan& pl, bool use_y, std::array<int, RingAnchor::kMax>& piv) const;
   /// Solves the fixed rings' equations for their pivots: q (positions: rhs_k = g_k cos phi_k or

@@ -111,6 +111,11 @@ struct EventDrivenOptions : RunControls {
   /// Adams phases solve their implicit corrector by fixed-point iteration (no Jacobian, no
   /// linear algebra) instead of Newton with a difference-quotient Jacobian.
   bool fixed_point = true;
+  /// Reduced contact phases integrated with Newton solve their systems by CVODE's dense
+  /// difference-quotient Jacobian (size 2 dim + 3) instead of the structured solve in the full
+  /// model's coordinates (hybrid/phase_session.hpp, lsys_reduced): the reference the structured
+  /// solve is tested against (tests/events/test_structured_newton.cpp). Not a case option.
+  bool dense_reduced_newton = false;
   double max_events_per_second = 1e6;
   /// The step limit per advance (per output interval or event), not per phase; reaching it
   /// ends the run (solver_failure). CVODE's own calls are cut at kCheckSteps steps and
