@@ -93,7 +93,8 @@ def main():
         "elements, n = 4 (E + 1) coordinates, a prescribed run-up from 100 rad/s at 1000 "
         "rad/s^2 over 0.2 s through the first critical speed (35 Hz) into rub at the mid-span "
         "seal. The event solver as the case runs it: rtol 1e-8, atol 1e-13, the method "
-        "chosen by the model's stiffness (BDF here), contact phases as the projected DAE, the "
+        "chosen by the model's stiffness (BDF here), contact phases in minimal coordinates "
+        "(their Newton systems banded: docs/fe-rotors.md section 10), the "
         "slopes declared as rotations (`rotor.rotations = \"dx*, dy*\"`, as the script writes "
         "them; the last column: the same run with the slopes taken for metres, "
         "`--set rotor.rotations=\"\"`, one run).",

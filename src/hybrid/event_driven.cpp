@@ -77,18 +77,15 @@ class Engine {
     const auto how = [](MultistepMethod m) {
       return m == MultistepMethod::Auto ? "auto" : "given";
     };
-    // the contact phases' formulation (ContactFormulation::Auto): minimal coordinates unless
-    // BDF integrates them and the Newton systems are banded (the projected DAE's are solved
-    // banded, minimal coordinates' densely)
+    // the contact phases' formulation (ContactFormulation::Auto): minimal coordinates, whose
+    // Newton systems (BDF) are the projected DAE's, banded where the model is (lsys_reduced)
     formulation_ = opt_.contact_phases;
     std::string formulation;
     if (formulation_ == ContactFormulation::Auto) {
       formulation_ = ContactFormulation::Reduced;
       if (!contact_adams_) {
         const NewtonStructure ns = assess_newton_structure(m_, init.t, init.q, init.v);
-        if (ns.project()) formulation_ = ContactFormulation::Projection;
-        formulation = fmt::format("\"formulation\": \"auto: {} ({})\", ",
-                                  ns.project() ? "projection" : "reduced", ns.reason());
+        formulation = fmt::format("\"formulation\": \"auto: reduced ({})\", ", ns.reason());
       }
     }
     return fmt::format("\"methods\": \"free flight {}, contact phases {}\", ", how(opt_.method),

@@ -12,10 +12,8 @@
 namespace rubdyn {
 
 std::string NewtonStructure::reason() const {
-  return fmt::format(
-      "Newton systems of {} coordinates, half-bandwidths {}/{} besides the spin: {}{}", n, kl, ku,
-      banded ? "banded" : "dense",
-      banded && n < kWideModel ? fmt::format(", fewer than {} coordinates", kWideModel) : "");
+  return fmt::format("Newton systems of {} coordinates, half-bandwidths {}/{} besides the spin: {}",
+                     n, kl, ku, banded ? "banded" : "dense");
 }
 
 NewtonStructure assess_newton_structure(const LagrangianModel& model, double t, const Vec& q,

@@ -8,9 +8,9 @@ number of modes kept, and the CPU time gained. Writes validation/fe/reduction.md
 Scenes: (A) cases/fe-runup.toml's run-up as committed (prescribed spin: the spin's difference is
 that of the torque holding it, drive_torque); (B) the same rotor with the spin free, driven by
 a constant torque of 362 N m (fe-two-seal's), where omega is an unknown, its contact phases
-integrated by BDF (solver.contact_method, as in cases/fe-two-seal.toml): the full model's as the
-projected DAE with banded Newton systems, the reduced models' (dense) in minimal coordinates
-(solver.contact_phases = "auto", docs/fe-rotors.md section 10). Both over 0.2 s, the event solver
+integrated by BDF (solver.contact_method, as in cases/fe-two-seal.toml), every model's in
+minimal coordinates (solver.contact_phases = "auto"; their Newton systems banded for the full
+model, dense for the reduced ones: docs/fe-rotors.md section 10). Both over 0.2 s, the event solver
 with BDF at rtol 1e-8, atol 1e-13 (the cases' setting) for every model. The scale of the
 integration error, below which a reduction's difference is not the reduction's: the
 Craig-Bampton model with 20 modes at rtol 1e-10 against rtol 1e-8 (at 12 elements the full

@@ -85,10 +85,10 @@ enum class ContactFormulation {
   /// The index-reduced DAE in the full coordinates, CVODE-BDF with projection after every step
   /// (an in-house cross-check of the reduced formulation, and the formulation of wide models).
   Projection,
-  /// Reduced, unless the contact phases are integrated by BDF and the model's Newton systems are
-  /// banded and wide (a finite-element rotor: hybrid/method_choice.hpp, NewtonStructure): then
-  /// Projection, whose Newton systems are solved banded in O(n w^2) where minimal coordinates'
-  /// are dense (2n + 3 difference quotients and an O(n^3) factorisation per Jacobian).
+  /// Reduced (its Newton systems under BDF the projected DAE's, lifted by the chart's tangent
+  /// map: banded in O(n w^2) where the model is, hybrid/phase_session.hpp). Until the structured
+  /// solve, wide banded models (40 coordinates and more) were projected: their minimal
+  /// coordinates' Newton systems were dense difference quotients (docs/fe-rotors.md section 10).
   Auto
 };
 

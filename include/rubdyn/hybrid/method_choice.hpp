@@ -44,24 +44,14 @@ struct StiffnessAssessment {
 StiffnessAssessment assess_stiffness(const LagrangianModel& model, double t, const Vec& q,
                                      const Vec& v);
 
-/// Models of at least this many coordinates are wide: their contact phases' dense Newton systems
-/// in minimal coordinates (size 2n + 3, from 2n + 3 difference quotients) cost more than the
-/// projected DAE's banded ones. Our calibration: cases/fe-two-seal.toml (57 coordinates) runs its
-/// contact phases 2.1x faster projected (250 -> 119 us per step, measured); below about 40 the
-/// dense kernels take microseconds and minimal coordinates (the constraints by construction)
-/// are kept.
-inline constexpr int kWideModel = 40;
-
 /// The structure of the model's Newton systems M - c1 df/dv - c2 (df/dq - d(M a)/dq) at a state:
 /// banded apart from the spin's row and column (core/bordered_band.hpp), and whether a banded
-/// factorisation beats a dense one by the flop count.
+/// factorisation beats a dense one by the flop count (the summary's report of how a run's
+/// Newton systems are solved).
 struct NewtonStructure {
   int n = 0;           ///< the model's coordinates
   int kl = 0, ku = 0;  ///< half-bandwidths without the spin's row and column
   bool banded = false;
-  /// Contact phases by the projected DAE rather than minimal coordinates (when BDF integrates
-  /// them): banded and wide.
-  bool project() const { return banded && n >= kWideModel; }
   std::string reason() const;
 };
 
