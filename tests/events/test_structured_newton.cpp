@@ -21,6 +21,44 @@ using namespace rubdyn::detail;
 
 namespace {
 
+/// The Jacobian [A_q, A_v] (n x 2n) of the constrained acceleration of one closed contact in
+/// `mode` at (t, q, v), dense: the bordered system [M -W_f; H 0] solved for the derivatives with
+/// W_f, H and wdot held (what the projected and the reduced sessions' Newton systems claim).
+Mat constrained_jacobian(const LagrangianModel& m, const PhaseContext& ctx, Phase mode, double t,
+                         const Vec& q, const Vec& v) {
+  const int n = m.num_dofs();
+  PhaseEval e(m, ctx.K);
+  REQUIRE(e.dynamics(t, q, v, ctx.modes, ctx.laws));
+  const Vec a = e.a();
+  Mat M(n, n), dfdq(n, n), dfdv(n, n), dMa(n, n);
+  m.mass_matrix(q, M);
+  m.smooth_force_jacobians(t, q, v, dfdq, dfdv);
+  m.mass_matrix_product_jacobian(q, a, dMa);
+  const ContactKinematics& c = e.c(0);
+  const int mc = mode == Phase::Stick ? 2 : 1;
+  Mat Wf(n, mc), H(mc, n);
+  H.row(0) = c.W_N.transpose();
+  Wf.col(0) = c.W_N;
+  if (mode == Phase::Stick) {
+    H.row(1) = c.W_T.transpose();
+    Wf.col(1) = c.W_T;
+  } else {
+    Wf.col(0) -= ctx.law(0).mu * slip_sign(mode) * c.W_T;
+  }
+  Mat Sad = Mat::Zero(n + mc, n + mc);
+  Sad.topLeftCorner(n, n) = M;
+  Sad.topRightCorner(n, mc) = -Wf;
+  Sad.bottomLeftCorner(mc, n) = H;
+  Mat rhs = Mat::Zero(n + mc, 2 * n);
+  rhs.topLeftCorner(n, n) = dfdq - dMa;
+  rhs.topRightCorner(n, n) = dfdv;
+  return Sad.fullPivLu().solve(rhs).topRows(n);
+}
+
+}  // namespace
+
+namespace {
+
 /// The residual of the structured solve in the dense system, relative: |A x - b| / (|A| |x|)
 /// (infinity norms), for states and right-hand sides drawn at the model's scales.
 double relative_residual(const LagrangianModel& m, double gamma, unsigned seed) {
@@ -157,32 +195,10 @@ ProjectedErrors projected_errors(const LagrangianModel& m, Phase mode, double ga
   const Eigen::Map<const Vec> xv(x.data(), 2 * n), bv(b.data(), 2 * n);
 
   // (1) the claimed Jacobian, dense
-  PhaseEval e(m, ctx.K);
+  const Mat A = constrained_jacobian(m, ctx, mode, t, q, v);
+  PhaseEval e(m, ctx.K);  // (the exact Jacobian's differences below)
   REQUIRE(e.dynamics(t, q, v, ctx.modes, ctx.laws));
-  const Vec a = e.a();
-  Mat M(n, n), dfdq(n, n), dfdv(n, n), dMa(n, n);
-  m.mass_matrix(q, M);
-  m.smooth_force_jacobians(t, q, v, dfdq, dfdv);
-  m.mass_matrix_product_jacobian(q, a, dMa);
-  const ContactKinematics& c = e.c(0);
-  const int mc = mode == Phase::Stick ? 2 : 1;
-  Mat Wf(n, mc), H(mc, n);
-  H.row(0) = c.W_N.transpose();
-  Wf.col(0) = c.W_N;
-  if (mode == Phase::Stick) {
-    H.row(1) = c.W_T.transpose();
-    Wf.col(1) = c.W_T;
-  } else {
-    Wf.col(0) -= ctx.law(0).mu * slip_sign(mode) * c.W_T;
-  }
-  Mat Sad = Mat::Zero(n + mc, n + mc);
-  Sad.topLeftCorner(n, n) = M;
-  Sad.topRightCorner(n, mc) = -Wf;
-  Sad.bottomLeftCorner(mc, n) = H;
-  Mat rhs = Mat::Zero(n + mc, 2 * n);
-  rhs.topLeftCorner(n, n) = dfdq - dMa;
-  rhs.topRightCorner(n, n) = dfdv;
-  const Mat A = Sad.fullPivLu().solve(rhs).topRows(n);
+  const ContactKinematics c = e.c(0);  // (a copy: e moves on)
   Mat Jc = Mat::Zero(2 * n, 2 * n);
   Jc.topRightCorner(n, n).setIdentity();
   Jc.bottomRows(n) = A;
@@ -341,32 +357,10 @@ ReducedErrors reduced_errors(const LagrangianModel& m, Phase mode, double gamma,
   err.inverse = (L * T - Mat::Identity(d, d)).cwiseAbs().maxCoeff();
 
   // (1) the claimed Jacobian, dense, at the embedded state
-  PhaseEval e(m, ctx.K);
+  const Mat A = constrained_jacobian(m, ctx, mode, t, qe, ve);
+  PhaseEval e(m, ctx.K);  // (the exact Jacobian's differences below)
   REQUIRE(e.dynamics(t, qe, ve, ctx.modes, ctx.laws));
-  const Vec a = e.a();
-  Mat M(n, n), dfdq(n, n), dfdv(n, n), dMa(n, n);
-  m.mass_matrix(qe, M);
-  m.smooth_force_jacobians(t, qe, ve, dfdq, dfdv);
-  m.mass_matrix_product_jacobian(qe, a, dMa);
-  const ContactKinematics c = e.c(0);
-  const int mc = mode == Phase::Stick ? 2 : 1;
-  Mat Wf(n, mc), H(mc, n);
-  H.row(0) = c.W_N.transpose();
-  Wf.col(0) = c.W_N;
-  if (mode == Phase::Stick) {
-    H.row(1) = c.W_T.transpose();
-    Wf.col(1) = c.W_T;
-  } else {
-    Wf.col(0) -= ctx.law(0).mu * slip_sign(mode) * c.W_T;
-  }
-  Mat Sad = Mat::Zero(n + mc, n + mc);
-  Sad.topLeftCorner(n, n) = M;
-  Sad.topRightCorner(n, mc) = -Wf;
-  Sad.bottomLeftCorner(mc, n) = H;
-  Mat rhs = Mat::Zero(n + mc, 2 * n);
-  rhs.topLeftCorner(n, n) = dfdq - dMa;
-  rhs.topRightCorner(n, n) = dfdv;
-  const Mat A = Sad.fullPivLu().solve(rhs).topRows(n);
+  const ContactKinematics c = e.c(0);  // (a copy: e moves on)
   Mat Jc = Mat::Zero(2 * d, 2 * d);
   Jc.topRightCorner(d, d).setIdentity();
   Jc.bottomLeftCorner(d, d) = L * A.leftCols(n) * T;

@@ -218,13 +218,7 @@ def main():
         "over the interval, over the slope, and the located value's error).",
         "",
     ]
-    if fails:
-        lines += ["**FAILED**: " + "; ".join(fails), ""]
-    with open(a.out, "w") as f:
-        f.write("\n".join(lines))
-    print("\n".join(lines))
-    if fails:
-        raise SystemExit(1)
+    pp.write_report(a.out, lines, fails)
 
 
 if __name__ == "__main__":

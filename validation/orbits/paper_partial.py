@@ -94,6 +94,17 @@ def transient(cli, out, o, x, T, kmax, extra=()):
     return read_grid(out, names, T, kmax)
 
 
+def write_report(path, lines, fails):
+    """Writes (and prints) the report's lines, the failed checks last; exits 1 if one failed."""
+    if fails:
+        lines += ["**FAILED**: " + "; ".join(fails), ""]
+    with open(path, "w") as f:
+        f.write("\n".join(lines))
+    print("\n".join(lines))
+    if fails:
+        raise SystemExit(1)
+
+
 def match(a, b):
     """Each multiplier of a matched to the nearest of b: (distance, a's error + b's error)."""
     out = []
@@ -306,13 +317,7 @@ def main():
             + (f"max abs(mu) {m0['abs']:.6f} +- {m0['error']:.1e} ({chk['stability']}), events "
                f"{chk['sequence']}" if m0 else chk["message"]))
         lines.append("")
-    if fails:
-        lines += ["**FAILED**: " + "; ".join(fails), ""]
-    with open(a.out, "w") as f:
-        f.write("\n".join(lines))
-    print("\n".join(lines))
-    if fails:
-        raise SystemExit(1)
+    write_report(a.out, lines, fails)
 
 
 if __name__ == "__main__":
