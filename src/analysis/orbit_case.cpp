@@ -287,6 +287,20 @@ void write_orbit_files(const HeldFolder& folder, const CaseSpec& spec, const Cas
 
 namespace {
 
+/// The monodromies' method of a branch with these options (branch.json's "monodromy").
+std::string monodromy_method(const CaseBranchOptions& o) {
+  return o.orbit.orbit.provider ? std::string(o.orbit.orbit.provider->name())
+                                : "finite differences";
+}
+
+/// A model's state names: its coordinates, then their rates (branch.csv's state columns).
+std::vector<std::string> state_names(const LagrangianModel& model) {
+  std::vector<std::string> names;
+  for (const auto& c : model.coordinates()) names.push_back(c.name);
+  for (const auto& c : model.coordinates()) names.push_back(c.rate);
+  return names;
+}
+
 /// The index of the branch's first period doubling among its specials (-1: none).
 int pd_special(const CaseBranch& b) {
   for (std::size_t i = 0; i < b.branch.specials.size(); ++i)
@@ -325,17 +339,12 @@ std::vector<CaseIssue> branch_issues(const CaseSpec& spec, const CaseBranchOptio
     bad.push_back({cl, 0, opt, old->key,
                    fmt::format("the earlier branch varies {}, not --vary {}", old->key, o.key)});
   if (old && bad.empty()) {
-    std::vector<std::string> names;
-    const auto model = build_model(spec);
-    for (const auto& c : model->coordinates()) names.push_back(c.name);
-    for (const auto& c : model->coordinates()) names.push_back(c.rate);
-    if (names != old->state_names)
+    if (state_names(*build_model(spec)) != old->state_names)
       bad.push_back(
           {cl, 0, opt, "", "the earlier branch's states are of another model (other coordinates)"});
   }
   if (o.resume) {
-    const std::string method =
-        o.orbit.orbit.provider ? std::string(o.orbit.orbit.provider->name()) : "finite differences";
+    const std::string method = monodromy_method(o);
     if (o.resume->periods != o.orbit.periods)
       bad.push_back(
           {cl, 0, "--periods", std::to_string(o.orbit.periods),
@@ -406,12 +415,11 @@ CaseBranch find_case_branch(const std::string& text, const std::string& source,
   CaseBranch out;
   out.key = o.key;
   out.periods = o.switch_from ? 2 * o.switch_from->periods : o.orbit.periods;
-  out.monodromy = o.orbit.orbit.provider ? o.orbit.orbit.provider->name() : "finite differences";
+  out.monodromy = monodromy_method(o);
   for (const auto& e : case_values(spec))
     if (e.full() == o.key) out.lambda0 = std::get<double>(e.value);
   const auto model = build_model(spec);
-  for (const auto& c : model->coordinates()) out.state_names.push_back(c.name);
-  for (const auto& c : model->coordinates()) out.state_names.push_back(c.rate);
+  out.state_names = state_names(*model);
   const int k = out.periods;
   const std::atomic<bool>* stop = o.orbit.stop;
   const double T_guess = o.orbit.period * k;  // an autonomous orbit's (NaN: forced)
