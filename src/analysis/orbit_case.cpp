@@ -705,7 +705,9 @@ class BranchReader {
     return member(obj, key, JsonValue::Kind::Number, where).number;
   }
 
-  void json(std::string_view text, CaseBranch& b) const {
+  /// branch.json's text as a document: a JSON table with the key (needed first: branch.csv's
+  /// column of it).
+  JsonValue document(std::string_view text) const {
     JsonValue doc;
     try {
       doc = parse_json(text);
@@ -714,7 +716,12 @@ class BranchReader {
     }
     if (doc.kind != JsonValue::Kind::Object)
       refuse(json_file_, 1, "", "", "must hold one JSON table (a branch.json of rubdyn branch)");
-    b.key = member(doc, "key", JsonValue::Kind::String, "").string;
+    member(doc, "key", JsonValue::Kind::String, "");
+    return doc;
+  }
+
+  /// The rest of branch.json (after csv(): its specials' states are named by the csv's columns).
+  void json(const JsonValue& doc, CaseBranch& b) const {
     b.lambda0 = number(doc, "from", "");
     // (written since periods and the method were: a branch before them had 1 and differences)
     b.periods = doc.find("periods") ? static_cast<int>(number(doc, "periods", "")) : 1;
@@ -862,21 +869,10 @@ CaseBranch read_case_branch(std::string_view json, std::string_view csv,
   const BranchReader r(source);
   CaseBranch b;
   // the key first (the csv's column), the state's names from the csv (the json's state by them)
-  {
-    JsonValue doc;
-    try {
-      doc = parse_json(json);
-    } catch (const JsonError& e) {
-      r.refuse(source + "/branch.json", e.line(), "", "", std::string("not JSON: ") + e.what());
-    }
-    const JsonValue* key = doc.find("key");
-    if (!key || key->kind != JsonValue::Kind::String)
-      r.refuse(source + "/branch.json", 0, "key", "",
-               "missing (not a branch.json of rubdyn branch?)");
-    b.key = key->string;
-  }
+  const JsonValue doc = r.document(json);
+  b.key = doc.find("key")->string;
   r.csv(csv, b);
-  r.json(json, b);
+  r.json(doc, b);
   const int n = static_cast<int>(b.branch.points.size());
   for (const BranchSpecial& sp : b.branch.specials)
     if (sp.after < 0 || sp.after >= n)
