@@ -166,6 +166,8 @@ class PhaseSession {
   /// the model's entry lists (ne_, entries_ true) where it gives them and `lists` allows, in
   /// O(entries) instead of O(n^2); else dense.
   void free_jacobians(double t, const double* y, const Vec* a = nullptr, bool lists = true);
+  /// Sizes M_, dfdq_, dfdv_, dMa_ (n x n) unless they are: the first dense Jacobian's.
+  void size_dense_blocks();
   /// Factors S = M - gamma df/dv - gamma^2 (df/dq - d(M a)/dq) of the last Jacobian.
   bool factor_newton(double gamma);
   /// dv_ = S^-1 (M b_v + gamma (df/dq - d(M a)/dq) b_q), b = (b_q, b_v, ...).
@@ -209,7 +211,6 @@ class PhaseSession {
   bool entries_ = false;  ///< the last Jacobian is in ne_ (else in the dense blocks)
   Vec f_, a_, rhs_n_, dv_;
   double gamma_ = 0.0;
-  Eigen::LDLT<Mat> ldlt_;               ///< M's, for the dense reference (jac_free)
   std::unique_ptr<BorderedBand> band_;  ///< S, banded with the spin as its border
   // the Projected session's constraints at its Jacobian's state: W_f, H^T (n x mc), S^-1 W_f,
   // and the Schur complement H S^-1 W_f (lsys_projected)

@@ -17,6 +17,8 @@ namespace {
 /// model nothing is allocated.
 struct SpinScratch {
   Vec b, u, z;  // (z: a right-hand side's rotor part, solve_mass)
+  Vec bm;       // b(q) of mass_product and spin_row
+  Vec m;        // solve_rotor_mass's right-hand side (a dense M)
 };
 
 SpinScratch& spin_scratch(int n) {
@@ -25,6 +27,8 @@ SpinScratch& spin_scratch(int n) {
     s.b.setZero(n);
     s.u.setZero(n);
     s.z.setZero(n);
+    s.bm.setZero(n);
+    s.m.setZero(n);
   }
   return s;
 }
@@ -55,6 +59,16 @@ MatrixModel::Envelope::Envelope(const Mat& A) {
     const auto k = static_cast<std::size_t>(i);
     for (Eigen::Index j = 0; j < len[k]; ++j) val[off[k] + j] = A(i, lo[k] + j);
   }
+  if (n >= kDenseRows && 2 * total >= n * A.cols()) dense = A;
+}
+
+void MatrixModel::Envelope::multiply_add(double alpha, const double* x, double* y) const {
+  if (dense.size() > 0) {
+    Eigen::Map<Vec>(y, dense.rows()).noalias() +=
+        alpha * (dense * Eigen::Map<const Vec>(x, dense.cols()));
+    return;
+  }
+  for (std::size_t k = 0; k < lo.size(); ++k) y[k] += alpha * dot(static_cast<int>(k), x);
 }
 
 double MatrixModel::Envelope::dot(int i, const double* x) const {
@@ -221,6 +235,7 @@ MatrixModel::MatrixModel(const MatrixParams& p)
     const auto k = static_cast<std::size_t>(i);
     RUBDYN_DEMAND(Le_.len[k] >= 1 && Le_.lo[k] + Le_.len[k] - 1 == i);
   }
+  if (Le_.dense.size() > 0) Minv_ = llt.solve(Mat::Identity(n_, n_));
   Me_ = Envelope(r.M.transpose());  // (M's columns, as the products used before: M symmetric)
   Ce_ = Envelope(r.C);
   Ke_ = Envelope(r.K);
@@ -259,7 +274,20 @@ double MatrixModel::b(int i, VecIn q, double ubs, double ubc) const {
   return bi;
 }
 
+void MatrixModel::spin_b(VecIn q, double ubs, double ubc, double* bq) const {
+  std::fill_n(bq, n_, 0.0);
+  Ge_.multiply_add(0.5, q.data(), bq);  // (0 + 0.5 dot: b(i)'s bits on the envelope)
+  bq[ix_] -= ubs;
+  bq[iy_] += ubc;
+}
+
 void MatrixModel::solve_rotor_mass(double* x) const {
+  if (Minv_.size() > 0) {
+    Vec& m = spin_scratch(n_).m;
+    m.head(n_) = Eigen::Map<const Vec>(x, n_);
+    Eigen::Map<Vec>(x, n_).noalias() = Minv_ * m.head(n_);
+    return;
+  }
   // L z = x by rows (z_i = (x_i - L_i,lo..i-1 . z) / L_ii), then L^T y = z by the columns of
   // L^T, i.e. the same rows of L (y_i = z_i / L_ii, then z_lo..i-1 -= y_i L_i,lo..i-1): both
   // touch the envelope only
@@ -281,7 +309,8 @@ void MatrixModel::solve_rotor_mass(double* x) const {
 }
 
 double MatrixModel::spin_column(VecIn q, double ubs, double ubc, double* bq, double* u) const {
-  for (int i = 0; i < n_; ++i) u[i] = bq[i] = b(i, q, ubs, ubc);
+  spin_b(q, ubs, ubc, bq);
+  std::copy_n(bq, n_, u);
   solve_rotor_mass(u);
   double s = p_.rotor.Jp;
   for (int i = 0; i < n_; ++i) s -= bq[i] * u[i];
@@ -317,14 +346,14 @@ void MatrixModel::mass_product(VecIn q, VecIn x, VecOut y) const {
   unbalance_terms(q, ubs, ubc);
   double yth = p_.rotor.Jp * x[th_];
   const bool rotor_zero = rotor_part_zero(x.data());  // (a prescribed spin's M e_theta alpha)
+  double* bq = spin_scratch(n_).bm.data();
+  spin_b(q, ubs, ubc, bq);
+  for (int i = 0; i < n_; ++i) y[i] = 0.0;
+  // (the same values: M's row times zeros adds nothing)
+  if (!rotor_zero) Me_.multiply_add(1.0, x.data(), y.data());  // (0 + 1 dot: dot's bits)
   for (int i = 0; i < n_; ++i) {
-    const double bi = b(i, q, ubs, ubc);
-    if (rotor_zero) {  // (the same values: M's row times zeros adds nothing)
-      y[i] = bi * x[th_];
-      continue;
-    }
-    y[i] = Me_.dot(i, x.data()) + bi * x[th_];
-    yth += bi * x[i];
+    y[i] += bq[i] * x[th_];
+    if (!rotor_zero) yth += bq[i] * x[i];
   }
   y[th_] = yth;
   for (const Node& nd : nodes_) {
@@ -379,8 +408,11 @@ bool MatrixModel::spin_row(double /*t*/, VecIn q, VecIn v, VecIn a, double& Ma, 
   double ubs, ubc;
   unbalance_terms(q, ubs, ubc);
   Ma = p_.rotor.Jp * a[th_];
-  if (!rotor_part_zero(a.data()))
-    for (int i = 0; i < n_; ++i) Ma += b(i, q, ubs, ubc) * a[i];
+  if (!rotor_part_zero(a.data())) {
+    double* bq = spin_scratch(n_).bm.data();
+    spin_b(q, ubs, ubc, bq);
+    for (int i = 0; i < n_; ++i) Ma += bq[i] * a[i];
+  }
   f = L.drive_torque(v[th_]);
   if (L.unbalance != 0.0) f -= L.gravity * ubc;
   return true;
@@ -490,8 +522,13 @@ void MatrixModel::mass_matrix_product_jacobian(VecIn q, VecIn a, MatOut J) const
 void MatrixModel::smooth_forces(double /*t*/, VecIn q, VecIn v, VecOut f) const {
   const auto& L = p_.loads;
   const double om = v[th_];
-  for (int i = 0; i < n_; ++i)
-    f[i] = p_.rotor.f0[i] - Ce_.dot(i, v.data()) - Ke_.dot(i, q.data()) - om * Ge_.dot(i, v.data());
+  // f0 - C v - K q - Omega G v, term by term (on an envelope the bits of the row's expression:
+  // y + (-1) dot = y - dot, y + (-Omega) dot = y - Omega dot)
+  double* fr = f.data();
+  for (int i = 0; i < n_; ++i) fr[i] = p_.rotor.f0[i];
+  Ce_.multiply_add(-1.0, v.data(), fr);
+  Ke_.multiply_add(-1.0, q.data(), fr);
+  Ge_.multiply_add(-om, v.data(), fr);
   f[th_] = L.drive_torque(om);
   if (L.unbalance != 0.0) {
     double ubs, ubc;

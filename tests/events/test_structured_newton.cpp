@@ -101,8 +101,13 @@ TEST_CASE(
   const auto fe_model = build_model(fe);
   // the rigid rotor of the paper: M depends on q, so d(M a)/dq enters
   const RotorStatorModel rigid(RotorStatorParams{});
+  // the two-seal FE rotor reduced by Craig-Bampton to 24 dense coordinates: S factored densely,
+  // the model's entry lists gathered into dense blocks (PhaseSession::free_jacobians)
+  const CaseSpec cb = load_case(std::string(RUBDYN_SOURCE_DIR) + "/cases/fe-two-seal.toml",
+                                {"reduction.method=\"craig-bampton\"", "reduction.modes=20"});
+  const auto cb_model = build_model(cb);
   for (const double gamma : {1e-6, 1e-5, 1e-4, 1e-2}) {
-    const std::vector<const LagrangianModel*> models = {fe_model.get(), &rigid};
+    const std::vector<const LagrangianModel*> models = {fe_model.get(), &rigid, cb_model.get()};
     for (const LagrangianModel* m : models) {
       INFO(m->name() << ", gamma " << gamma);
       // The exact Newton step, computed two ways: LU with partial pivoting of S is backward
