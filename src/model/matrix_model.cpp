@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "rubdyn/core/demand.hpp"
 
@@ -169,13 +170,14 @@ std::vector<Coordinate> matrix_model_coordinates(int n, const std::vector<std::s
   return c;
 }
 
-MatrixModel::MatrixModel(const MatrixParams& p)
-    : p_(p),
-      K_(static_cast<int>(p.node_list().size())),
-      n_(p.rotor.size()),
-      N_(p.rotor.size() + 1),
-      th_(p.rotor.size()),
+MatrixModel::MatrixModel(MatrixParams params)
+    : p_(std::move(params)),
+      K_(static_cast<int>(p_.node_list().size())),
+      n_(p_.rotor.size()),
+      N_(p_.rotor.size() + 1),
+      th_(p_.rotor.size()),
       chart_(*this) {
+  const MatrixParams& p = p_;
   const auto& r = p.rotor;
   const std::vector<MatrixNode> list = p.node_list();
   RUBDYN_DEMAND(K_ >= 1 && K_ <= kMaxContactNodes);

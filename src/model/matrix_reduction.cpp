@@ -330,10 +330,15 @@ ReducedMatrices reduce_matrix_model(const MatrixParams& full, const ReductionPar
 
 MatrixParams ReducedMatrices::apply(const MatrixParams& full) const {
   RUBDYN_DEMAND(full.rotor.size() == full_size && node_xy.size() == full.node_list().size());
-  MatrixParams p = full;
-  const double Jp = p.rotor.Jp;
+  // full's every member but its rotor (whose n x n matrices a copy would only replace)
+  MatrixParams p;
+  p.node = full.node;
+  p.stator = full.stator;
+  p.contact = full.contact;
+  p.nodes = full.nodes;
+  p.loads = full.loads;
   p.rotor = rotor;
-  p.rotor.Jp = Jp;
+  p.rotor.Jp = full.rotor.Jp;
   for (std::size_t k = 0; k < node_xy.size(); ++k) {
     MatrixContactNode& at = p.nodes.empty() ? p.node : p.nodes[k].at;
     at.x = node_xy[k].first;

@@ -117,7 +117,7 @@ std::vector<double> rotation_lengths(const Mat& M, const std::vector<bool>& rota
 class MatrixModel final : public LagrangianModel {
  public:
   /// Requires M symmetric positive definite (RUBDYN_DEMAND; the case validation checks it).
-  explicit MatrixModel(const MatrixParams& p);
+  explicit MatrixModel(MatrixParams p);  ///< (by value: a temporary's matrices are moved in)
 
   std::string_view name() const override { return "matrices"; }
   int num_dofs() const override { return N_; }
