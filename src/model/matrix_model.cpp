@@ -237,7 +237,10 @@ MatrixModel::MatrixModel(MatrixParams params)
     const auto k = static_cast<std::size_t>(i);
     RUBDYN_DEMAND(Le_.len[k] >= 1 && Le_.lo[k] + Le_.len[k] - 1 == i);
   }
-  if (Le_.dense.size() > 0) Minv_ = llt.solve(Mat::Identity(n_, n_));
+  if (Le_.dense.size() > 0) {  // (a dense M: its inverse, and L's dense copy is not kept)
+    Minv_ = llt.solve(Mat::Identity(n_, n_));
+    Le_.dense = Mat();
+  }
   Me_ = Envelope(r.M.transpose());  // (M's columns, as the products used before: M symmetric)
   Ce_ = Envelope(r.C);
   Ke_ = Envelope(r.K);
