@@ -27,6 +27,7 @@
 #include "rubdyn/io/solver_options.hpp"
 #include "rubdyn/io/text_files.hpp"
 #include "rubdyn/model/matrix_model.hpp"
+#include "rubdyn/model/matrix_reduction.hpp"
 #include "rubdyn/stepping/fixed_step.hpp"
 
 namespace rubdyn {
@@ -467,6 +468,11 @@ std::vector<KeySpec> schema(const CaseSpec& c) {
   contact_and_load_keys(b);
   if (find_model(c.model)) initial_keys(b, c);
   run_solver_output_keys(b);
+  if (c.model == "matrices") {
+    // the rotor's modal amplitudes as output columns (model/matrix_model.hpp): a key of this
+    // model's only, after the others of [output] (every other case's keys as they were)
+    b.integer("output", "modes", [](CaseSpec& s) { return &s.matrices.output_modes; });
+  }
   return b.keys;
 }
 
@@ -1781,8 +1787,34 @@ class Loader {
         }
     }
     // ([reduction]'s own rules are reduce_matrix_model's, reported by read_reduction)
+    const int modes = p.output_modes;
+    rule(modes >= 0, "output.modes", modes,
+         "must be >= 0 (the number of the rotor's lowest free modes whose amplitudes "
+         "timeseries.csv holds; 0: none)");
     buildable_ = matrices_ok_ && reduction_ok_;
     if (!buildable_ || issues_.size() != before) return;
+    if (modes > 0) {
+      // the modes are those of the model integrated: the reduced rotor's with a [reduction]
+      const MatrixParams mp = matrix_model_params(c);
+      const int nr = mp.rotor.size();
+      rule(modes <= nr, "output.modes", modes,
+           c.reduced ? fmt::format("must be at most n = {} (the reduced rotor's coordinates: the "
+                                   "modes are those of the model integrated)",
+                                   nr)
+                     : fmt::format("must be at most n = {} (the rotor's coordinates)", nr));
+      rule(modes > nr || modes % 2 == 0 || !isotropic_rotor(mp), "output.modes", modes,
+           "must be even: the rotor is isotropic and its modes come in (x, y) pairs of one "
+           "frequency (both of a pair are written)");
+      // the columns mode<k>, vmode<k> must not be a coordinate's or its rate's
+      for (const Coordinate& x : initial_coordinates(c))
+        for (int k = 1; k <= modes && k <= nr; ++k)
+          for (const std::string& col : {fmt::format("mode{}", k), fmt::format("vmode{}", k)})
+            rule(x.name != col && x.rate != col, "output.modes", modes,
+                 fmt::format("would write a column {} beside the coordinate {} (its rate {}): "
+                             "rename the coordinate",
+                             col, x.name, x.rate));
+      if (issues_.size() != before) return;
+    }
     // M_full(q) = [[M, b], [b^T, Jp]] is positive definite where the Schur complement
     // Jp - b^T M^-1 b of theta is > 0 (docs/models.md, 5.3): required of the initial state
     // (of the reduced model with a [reduction]: its coordinates are the initial state's)

@@ -197,6 +197,7 @@ OutputFolder::OutputFolder(const std::string& dir, const CaseSpec& spec, std::at
     for (const auto& [name, bytes] : matrices) write_file_at(fd, name, dir + "/" + name, bytes);
     write_file_at(fd, "case.resolved.toml", dir + "/case.resolved.toml", resolved_toml(spec));
     write_reduction_files(fd, dir, spec);  // (a reduced matrices model's; io/reduction_files.hpp)
+    write_output_modes_files(fd, dir, spec);  // (output.modes's; the same)
     ts_ = open_output_stream_at(fd, "timeseries.csv", dir + "/timeseries.csv");
     ev_ = open_output_stream_at(fd, "events.csv", dir + "/events.csv");
     if (!state_columns_.empty()) st_ = open_output_stream_at(fd, "state.csv", dir + "/state.csv");

@@ -23,18 +23,72 @@ std::string json_num(double x) {
   return std::isfinite(x) ? fmt::format("{}", x) : std::string("null");
 }
 
+/// Removes the regular files `names` of the folder (an earlier run's: `what` says which).
+template <class Names>
+void remove_stale(int dir_fd, const std::string& dir, const Names& names, const char* what) {
+  for (const char* name : names) {
+    struct stat st {};
+    if (::fstatat(dir_fd, name, &st, AT_SYMLINK_NOFOLLOW) != 0 || !S_ISREG(st.st_mode)) continue;
+    if (::unlinkat(dir_fd, name, 0) != 0 && errno != ENOENT)
+      throw std::runtime_error(fmt::format("cannot remove {}/{} (of an earlier {}): {}", dir, name,
+                                           what, std::strerror(errno)));
+  }
+}
+
 }  // namespace
+
+void write_output_modes_files(int dir_fd, const std::string& dir, const CaseSpec& spec) {
+  const int count = spec.model == "matrices" ? spec.matrices.output_modes : 0;
+  if (count <= 0) {
+    remove_stale(dir_fd, dir, kOutputModesFiles, "run with output.modes");
+    return;
+  }
+  const MatrixParams p = matrix_model_params(spec);  // (the reduced model with a [reduction])
+  const RotorModes modes = rotor_modes(p, count);
+  const auto put = [&](const char* name, const std::string& bytes) {
+    write_file_at(dir_fd, name, dir + "/" + name, bytes);
+  };
+  put("output_modes.npy", npy_bytes(modes.shapes));
+  const MatrixRotorParams& r = p.rotor;
+  const int n = r.size();
+  std::string j = "{\n";
+  j += fmt::format("  \"count\": {},\n", count);
+  j += fmt::format("  \"model\": \"{}\",\n", matrix_reduction(spec) ? "reduced" : "full");
+  j += fmt::format("  \"size\": {},\n", n);
+  j += fmt::format("  \"isotropic\": {},\n", modes.isotropic ? "true" : "false");
+  std::string f, planes, names;
+  for (int k = 0; k < count; ++k) {
+    if (k) f.append(", "), planes.append(", ");
+    f.append(json_num(modes.f_hz[static_cast<std::size_t>(k)]));
+    planes.append(quoted_string(modes.planes[static_cast<std::size_t>(k)]));
+  }
+  for (int i = 0; i < n; ++i) {
+    if (i) names.append(", ");
+    names.append(quoted_string(static_cast<int>(r.names.size()) == n
+                                   ? r.names[static_cast<std::size_t>(i)]
+                                   : fmt::format("q{}", i)));
+  }
+  j.append("  \"frequencies_hz\": [").append(f).append("],\n");
+  j.append("  \"planes\": [").append(planes).append("],\n");
+  j.append("  \"coordinates\": [").append(names).append("],\n");
+  j += fmt::format(
+      "  \"definition\": {}\n}}\n",
+      quoted_string(fmt::format(
+          "timeseries.csv's mode<k> is eta_k = phi_k^T M q and vmode<k> its rate phi_k^T M q', "
+          "phi_k the k-th column of output_modes.npy: the {} lowest free modes (K phi = w^2 M "
+          "phi, undamped, at rest) of the {} rotor's M and K ({} coordinates q, the rows of the "
+          "shapes), mass-normalised (phi^T M phi = 1), each with its largest entry positive{}",
+          count, matrix_reduction(spec) ? "reduced" : "full", n,
+          modes.isotropic ? "; isotropic: computed on the x plane, in (x, y) pairs of one "
+                            "frequency"
+                          : "")));
+  put("output_modes.json", j);
+}
 
 void write_reduction_files(int dir_fd, const std::string& dir, const CaseSpec& spec) {
   const auto red = matrix_reduction(spec);
   if (!red) {
-    for (const char* name : kReductionFiles) {
-      struct stat st {};
-      if (::fstatat(dir_fd, name, &st, AT_SYMLINK_NOFOLLOW) != 0 || !S_ISREG(st.st_mode)) continue;
-      if (::unlinkat(dir_fd, name, 0) != 0 && errno != ENOENT)
-        throw std::runtime_error(fmt::format("cannot remove {}/{} (of an earlier reduced run): {}",
-                                             dir, name, std::strerror(errno)));
-    }
+    remove_stale(dir_fd, dir, kReductionFiles, "reduced run");
     return;
   }
   const auto put = [&](const char* name, const std::string& bytes) {

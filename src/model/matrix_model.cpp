@@ -1,5 +1,7 @@
 #include "rubdyn/model/matrix_model.hpp"
 
+#include <fmt/format.h>
+
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
@@ -7,6 +9,7 @@
 #include <utility>
 
 #include "rubdyn/core/demand.hpp"
+#include "rubdyn/model/matrix_reduction.hpp"
 
 namespace rubdyn {
 
@@ -259,6 +262,40 @@ MatrixModel::MatrixModel(MatrixParams params)
   slot_ = lo;
   for (int i = 0; i < n_; ++i)
     if (i != ix_ && i != iy_) others_.push_back(i);
+  if (p.output_modes > 0) {
+    // the rotor's lowest free modes as observables: eta_k = (M phi_k)^T q by M Phi, made once
+    const RotorModes modes = rotor_modes(p, p.output_modes);
+    Mphi_ = r.M * modes.shapes;
+    const bool rotations =
+        std::find(r.rotation.begin(), r.rotation.end(), true) != r.rotation.end();
+    const std::string unit = "kg^0.5 m";
+    const std::string mixed =
+        rotations ? "; q holds rotations (rad): a sum over deflections in kg^0.5 m and rotations "
+                    "in kg^0.5 rad"
+                  : "";
+    for (const char* rate : {"", "v"}) {
+      for (int k = 0; k < p.output_modes; ++k) {
+        const auto j = static_cast<std::size_t>(k);
+        const std::string plane =
+            modes.planes[j].empty() ? std::string() : fmt::format(", {} plane", modes.planes[j]);
+        observables_.push_back(
+            {fmt::format("{}mode{}", rate, k + 1), *rate ? fmt::format("{}/s", unit) : unit,
+             fmt::format("{} of the rotor's free mode {} ({:.6g} Hz{}): {}phi^T M {}, phi "
+                         "mass-normalised (output_modes.npy){}",
+                         *rate ? "the rate of the amplitude" : "the amplitude", k + 1,
+                         modes.f_hz[j], plane, *rate ? "" : "eta = ", *rate ? "q'" : "q", mixed)});
+      }
+    }
+  }
+}
+
+void MatrixModel::compute_observables(double /*t*/, VecIn q, VecIn v, VecIn /*a*/,
+                                      const ContactForce* /*F*/, VecOut out) const {
+  const Eigen::Index m = Mphi_.cols();
+  for (Eigen::Index k = 0; k < m; ++k) {
+    out[k] = Mphi_.col(k).dot(q.head(n_));
+    out[m + k] = Mphi_.col(k).dot(v.head(n_));
+  }
 }
 
 void MatrixModel::unbalance_terms(VecIn q, double& ubs, double& ubc) const {

@@ -36,10 +36,10 @@ Mat sub(const Mat& A, const std::vector<int>& rows, const std::vector<int>& cols
   return S;
 }
 
-/// The isotropic structure: n even, M, C, K equal on the x (even) and y (odd) coordinates and
-/// without x-y terms (to 1e-12 of each matrix's largest entry: the reader's symmetry tolerance),
-/// and every node's (x, y) = (2i, 2i + 1).
-bool isotropic(const MatrixParams& p) {
+}  // namespace
+
+// (1e-12 of each matrix's largest entry: the reader's symmetry tolerance)
+bool isotropic_rotor(const MatrixParams& p) {
   const MatrixRotorParams& r = p.rotor;
   const int n = r.size();
   if (n % 2 != 0) return false;
@@ -55,6 +55,8 @@ bool isotropic(const MatrixParams& p) {
   }
   return true;
 }
+
+namespace {
 
 /// Mass-normalised modes of (K, M) (symmetric, M positive definite), lowest first, each with its
 /// largest entry positive (a deterministic sign). Frequencies [Hz] of negative eigenvalues (an
@@ -72,6 +74,35 @@ void modes_of(const Mat& K, const Mat& M, Vec& f_hz, Mat& Phi) {
     Index at = 0;
     Phi.col(k).cwiseAbs().maxCoeff(&at);
     if (Phi(at, k) < 0.0) Phi.col(k) *= -1.0;
+  }
+}
+
+/// The coordinates the modes are computed on: an isotropic rotor's x plane (its even
+/// coordinates, `per` = 2), which stands for both; else all of q (`per` = 1).
+std::vector<int> mode_plane(int n, int per) {
+  std::vector<int> plane;
+  for (int i = 0; i < n; i += per) plane.push_back(i);
+  return plane;
+}
+
+/// The free modes of the rotor r on `plane` (every one, lowest first).
+void free_modes(const MatrixRotorParams& r, const std::vector<int>& plane, Vec& f, Mat& Phi) {
+  modes_of(sub(r.K, plane, plane), sub(r.M, plane, plane), f, Phi);
+}
+
+/// The first `kept` of the plane's modes Phi (plane x kept or wider) and their frequencies f
+/// spread over the n coordinates: with `per` = 2 each becomes the (x, y) pair of columns.
+void spread_modes(const std::vector<int>& plane, int per, const Mat& Phi, const Vec& f, int kept,
+                  int n, Mat& modes, std::vector<double>& f_hz, std::vector<std::string>& planes) {
+  modes.setZero(n, per * kept);
+  for (int j = 0; j < kept; ++j) {
+    for (std::size_t i = 0; i < plane.size(); ++i)
+      for (int c = 0; c < per; ++c)
+        modes(plane[i] + c, per * j + c) = Phi(static_cast<Index>(i), j);
+    for (int c = 0; c < per; ++c) {
+      f_hz.push_back(f[j]);
+      planes.push_back(per == 2 ? (c == 0 ? "x" : "y") : "");
+    }
   }
 }
 
@@ -132,6 +163,20 @@ std::string ReducedMatrices::describe() const {
                      full_size, m, m - nm, phys, modes, isotropic ? ", in (x, y) pairs" : "");
 }
 
+RotorModes rotor_modes(const MatrixParams& p, int count) {
+  const int n = p.rotor.size();
+  RotorModes out;
+  out.isotropic = isotropic_rotor(p);
+  const int per = out.isotropic ? 2 : 1;
+  RUBDYN_DEMAND(count >= 0 && count <= n && count % per == 0);
+  const std::vector<int> plane = mode_plane(n, per);
+  Vec f;
+  Mat Phi;
+  if (count > 0) free_modes(p.rotor, plane, f, Phi);
+  spread_modes(plane, per, Phi, f, count / per, n, out.shapes, out.f_hz, out.planes);
+  return out;
+}
+
 ReducedMatrices reduce_matrix_model(const MatrixParams& full, const ReductionParams& r) {
   RUBDYN_DEMAND(r.method != ReductionMethod::None);
   const MatrixRotorParams& fr = full.rotor;
@@ -168,11 +213,10 @@ ReducedMatrices reduce_matrix_model(const MatrixParams& full, const ReductionPar
   ReducedMatrices out;
   out.params = r;
   out.full_size = n;
-  out.isotropic = isotropic(full);
+  out.isotropic = isotropic_rotor(full);
   const int per = out.isotropic ? 2 : 1;  // coordinates per mode
   // the planes: isotropic, the x plane (even coordinates) stands for both; else all of q
-  std::vector<int> plane;
-  for (int i = 0; i < n; i += per) plane.push_back(i);
+  const std::vector<int> plane = mode_plane(n, per);
   // the boundary (contact coordinates) of that plane, in node order, and the rest
   std::vector<int> bnd, inner;
   for (const MatrixNode& nd : nodes) {
@@ -221,7 +265,7 @@ ReducedMatrices reduce_matrix_model(const MatrixParams& full, const ReductionPar
       shapes.row(pos(inner[i])) = Phi.row(static_cast<Index>(i)).head(kept);
     Phi = shapes;
   } else {
-    modes_of(sub(fr.K, plane, plane), sub(fr.M, plane, plane), f, Phi);
+    free_modes(fr, plane, f, Phi);  // (rotor_modes's)
     kept = kept_count(r, f, per, n, n, "free");
     if (kept < nb) {
       throw ReductionRefused(
@@ -271,19 +315,10 @@ ReducedMatrices reduce_matrix_model(const MatrixParams& full, const ReductionPar
   const int mp = static_cast<int>(Tp.cols());
   const int m = per * mp;
   out.T.setZero(n, m);
-  out.modes.setZero(n, per * kept);
   for (int j = 0; j < mp; ++j)
     for (std::size_t i = 0; i < plane.size(); ++i)
       for (int c = 0; c < per; ++c) out.T(plane[i] + c, per * j + c) = Tp(static_cast<Index>(i), j);
-  for (int j = 0; j < kept; ++j) {
-    for (std::size_t i = 0; i < plane.size(); ++i)
-      for (int c = 0; c < per; ++c)
-        out.modes(plane[i] + c, per * j + c) = Phi(static_cast<Index>(i), j);
-    for (int c = 0; c < per; ++c) {
-      out.f_hz.push_back(f[j]);
-      out.mode_planes.push_back(out.isotropic ? (c == 0 ? "x" : "y") : "");
-    }
-  }
+  spread_modes(plane, per, Phi, f, kept, n, out.modes, out.f_hz, out.mode_planes);
 
   // the reduced model
   MatrixRotorParams& rr = out.rotor;
@@ -337,6 +372,7 @@ MatrixParams ReducedMatrices::apply(const MatrixParams& full) const {
   p.contact = full.contact;
   p.nodes = full.nodes;
   p.loads = full.loads;
+  p.output_modes = full.output_modes;
   p.rotor = rotor;
   p.rotor.Jp = full.rotor.Jp;
   for (std::size_t k = 0; k < node_xy.size(); ++k) {

@@ -37,6 +37,13 @@ PrescribedSpin::PrescribedSpin(std::unique_ptr<LagrangianModel> inner, double t0
     throw std::invalid_argument("a prescribed spin needs a model with a spin coordinate; '" +
                                 std::string(inner_->name()) + "' has none");
   n_ = inner_->num_dofs() - 1;
+  observables_ = {
+      {"theta", "rad", "the prescribed spin angle"},
+      {"omega", "rad/s", "the prescribed spin speed"},
+      {"drive_torque", "N m", "the torque that holds the prescribed speed"},
+  };
+  const std::vector<Observable>& own = inner_->observables();
+  observables_.insert(observables_.end(), own.begin(), own.end());
   for (int i = 0; i <= n_; ++i)
     if (i != s_) coords_.push_back(inner_->coordinates()[static_cast<std::size_t>(i)]);
   // the inner ring chart with the spin dropped: every index above s_ moves down by one; a point
@@ -264,12 +271,7 @@ double PrescribedSpin::applied_power(double t, VecIn q, VecIn v, VecIn a,
 }
 
 const std::vector<Observable>& PrescribedSpin::observables() const {
-  static const std::vector<Observable> obs = {
-      {"theta", "rad", "the prescribed spin angle"},
-      {"omega", "rad/s", "the prescribed spin speed"},
-      {"drive_torque", "N m", "the torque that holds the prescribed speed"},
-  };
-  return obs;
+  return observables_;
 }
 
 void PrescribedSpin::compute_observables(double t, VecIn q, VecIn v, VecIn a, const ContactForce* F,
@@ -277,6 +279,13 @@ void PrescribedSpin::compute_observables(double t, VecIn q, VecIn v, VecIn a, co
   out[0] = theta(t);
   out[1] = omega(t);
   out[2] = drive_torque(t, q, v, a, F);
+  const auto m = static_cast<Eigen::Index>(observables_.size()) - 3;
+  if (m == 0) return;
+  // the inner model's, at the full state (the spin's entries inserted)
+  Scratch& s = scratch();
+  embed(t, q, v, s);
+  insert(a, s_, law_.alpha, s.af);
+  inner_->compute_observables(t, s.qf, s.vf, s.af, F, out.segment(3, m));
 }
 
 double PrescribedSpin::spin(double t, VecIn /*q*/, VecIn /*v*/) const {

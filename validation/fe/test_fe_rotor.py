@@ -425,3 +425,197 @@ def test_a_reduced_run_writes_its_model_and_bad_input_exits_2():
         # the unreduced model into the same folder: the reduced files go
         run(case, out, "--t-end", "0.01")
         assert not any(n.startswith("reduced_") or n == "reduction.json" for n in os.listdir(out))
+
+
+# ---- output.modes: the rotor's modal coordinates as output columns -----------------------------
+
+def plane_modes(M, K):
+    """An isotropic rotor's free modes computed here, independently of rubdyn: scipy's eigh of
+    each plane's (K, M) (x: even coordinates, y: odd), mass-normalised by eigh, each with its
+    largest entry positive; n x n shapes in rubdyn's order (the x-plane then the y-plane mode of
+    each pair) and their frequencies [Hz]."""
+    n = M.shape[0]
+    x = np.arange(0, n, 2)
+    w2, V = sl.eigh(K[np.ix_(x, x)], M[np.ix_(x, x)])
+    shapes, f = np.zeros((n, n)), np.repeat(np.sqrt(w2) / (2 * math.pi), 2)
+    for j in range(V.shape[1]):
+        v = V[:, j] * np.sign(V[np.argmax(np.abs(V[:, j])), j])
+        shapes[x, 2 * j] = v
+        shapes[x + 1, 2 * j + 1] = v
+    return shapes, f
+
+
+def read_columns(folder):
+    """timeseries.csv's header and its rows as text (the bytes each column wrote)."""
+    with open(os.path.join(folder, "timeseries.csv")) as f:
+        rows = [line.rstrip("\n").split(",") for line in f]
+    return rows[0], rows[1:]
+
+
+def check_modal_columns(folder, names, Mq, shapes, count):
+    """mode<k> and vmode<k> of timeseries.csv against phi_k^T M q and phi_k^T M v of the
+    coordinates q (names: q's column names, in q's order; Mq: the M of q) written beside them,
+    with the shapes given. The coordinates are written exactly (the shortest text that reads back
+    to the same double), so the only difference is the order of the n-term sums: each within
+    n eps sum_i |(M phi)_i q_i| (the rounding bound of a sum of n products), the tolerance used
+    (times 2: rubdyn rounds its sum, numpy its own)."""
+    header, rows = read_columns(folder)
+    num = [j for j, h in enumerate(header) if not h.startswith("phase")]  # (words: free, ...)
+    data = np.full((len(rows), len(header)), np.nan)
+    data[:, num] = [[float(r[j]) for j in num] for r in rows]
+    col = {h: i for i, h in enumerate(header)}
+    q = data[:, [col[nm] for nm in names]]
+    v = data[:, [col["v" + nm] for nm in names]]
+    Mphi = Mq @ shapes[:, :count]
+    eps = np.finfo(float).eps
+    for k in range(count):
+        for pre, x in (("mode", q), ("vmode", v)):
+            got = data[:, col[f"{pre}{k + 1}"]]
+            ref = x @ Mphi[:, k]
+            bound = 2 * len(names) * eps * (np.abs(x) @ np.abs(Mphi[:, k]))
+            assert np.all(np.abs(got - ref) <= bound), (pre, k, np.max(np.abs(got - ref)))
+    return header, rows, data, col
+
+
+@needs_cli
+def test_output_modes_writes_the_rotors_modal_amplitudes():
+    # cases/fe-runup.toml (52 coordinates, isotropic, prescribed spin) over 0.15 s (its first
+    # impact at 0.10708 s, so the rub is in the run) with output.modes = 4: the files' frequencies
+    # are the planes' eigenvalues computed here with scipy (1e-9 relative: two eigensolvers of a
+    # symmetric-definite 26 x 26 pencil agree to about eps times the spread of its eigenvalues,
+    # 1e-7 Hz^2 / f^2 of the lowest: measured 1.5e-11 on the first four), the written shapes are
+    # scipy's (1e-10 of their largest entry: eigenvectors are determined to eps ||A|| / gap, the
+    # first pairs' gaps are wide; measured 1e-12), the columns are the written shapes' amplitudes
+    # of the written coordinates (check_modal_columns) and scipy's shapes' to 1e-10 of the
+    # largest sum of |terms| (measured 7e-13), and every column of the run without output.modes
+    # is the same text with it: the modes are output only.
+    import json
+    case = os.path.join(ROOT, "cases", "fe-runup.toml")
+    with open(case, "rb") as f:
+        c = tomllib.load(f)
+    folder = os.path.join(ROOT, "cases")
+    M, K = (np.load(os.path.join(folder, c["rotor"][k])) for k in ("M", "K"))
+    names = [s.strip() for s in c["rotor"]["coordinates"].split(",")]
+    shapes, f = plane_modes(M, K)
+    base = ["--t-end", "0.15", "--set", "output.coordinates=\"all\""]
+    with tempfile.TemporaryDirectory() as tmp:
+        plain, modal = os.path.join(tmp, "plain"), os.path.join(tmp, "modal")
+        run(case, plain, *base)
+        run(case, modal, *base, "--set", "output.modes=4")
+        with open(os.path.join(modal, "output_modes.json")) as fj:
+            om = json.load(fj)
+        assert om["model"] == "full" and om["size"] == 52 and om["count"] == 4
+        assert om["planes"] == ["x", "y", "x", "y"]
+        np.testing.assert_allclose(om["frequencies_hz"], f[:4], rtol=1e-9, atol=0)
+        written = np.load(os.path.join(modal, "output_modes.npy"))
+        assert written.shape == (52, 4)
+        np.testing.assert_allclose(written, shapes[:, :4], rtol=0,
+                                   atol=1e-10 * np.abs(shapes[:, :4]).max())
+        header, rows, data, col = check_modal_columns(modal, names, M, written, 4)
+        # against scipy's own shapes too
+        for k in range(4):
+            ref = data[:, [col[nm] for nm in names]] @ (M @ shapes[:, k])
+            scale = np.abs(data[:, [col[nm] for nm in names]]) @ np.abs(M @ shapes[:, k])
+            assert np.all(np.abs(data[:, col[f"mode{k + 1}"]] - ref) <= 1e-10 * scale.max())
+        # after the coordinates' rates and the prescribed spin's observables, before the contacts
+        i = header.index("drive_torque")
+        assert header[i - 2:i + 9] == ["theta", "omega", "drive_torque", "mode1", "mode2",
+                                       "mode3", "mode4", "vmode1", "vmode2", "vmode3", "vmode4"]
+        assert any(e["kind"] == "impact" for e in events(modal))  # (the rub is in the run)
+        ph, prows = read_columns(plain)
+        assert [h for h in header if not h.startswith(("mode", "vmode"))] == ph
+        keep = [j for j, h in enumerate(header) if not h.startswith(("mode", "vmode"))]
+        assert len(prows) == len(rows)
+        for a, b in zip(prows, rows):
+            assert a == [b[j] for j in keep]
+        for name in ("events.csv", "case.resolved.toml"):
+            with open(os.path.join(plain, name)) as fa, open(os.path.join(modal, name)) as fb:
+                a, b = fa.read(), fb.read()
+            if name == "events.csv":
+                assert a == b
+            else:  # the key's one line (and the folders' names)
+                a, b = (x.replace(d, "D") for x, d in ((a, plain), (b, modal)))
+                assert b.replace("modes = 4\n", "") == a.replace("modes = 0\n", "")
+                assert "\nmodes = 4\n" in b and "\nmodes = 0\n" in a
+        # a run without modes into the same folder removes the modes' files
+        run(case, modal, *base)
+        assert not any(n.startswith("output_modes") for n in os.listdir(modal))
+
+
+@needs_cli
+def test_output_modes_of_a_reduced_and_of_a_torque_driven_rotor():
+    # A Craig-Bampton reduced fe-runup (8 modes, 10 coordinates p) with output.modes = 4: the
+    # modes are the reduced rotor's (of its M_r, K_r: the files say "reduced", size 10), their
+    # frequencies the full rotor's from above (Rayleigh-Ritz: a subspace's), within 1e-4 relative
+    # (measured 2.2e-5: the static constraint modes carry the seal's flexibility), the reduced
+    # rotor's own modes are scipy's of reduced_M, reduced_K (as above), and the columns the written shapes' amplitudes of the reduced coordinates
+    # p with M_r. cases/fe-two-seal.toml (torque-driven: the columns come from the matrices model
+    # itself, no prescribed spin) with output.modes = 2 the same against its M.
+    import json
+    case = os.path.join(ROOT, "cases", "fe-runup.toml")
+    with open(case, "rb") as f:
+        c = tomllib.load(f)
+    folder = os.path.join(ROOT, "cases")
+    M, K = (np.load(os.path.join(folder, c["rotor"][k])) for k in ("M", "K"))
+    _, f_full = plane_modes(M, K)
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "cb")
+        run(case, out, "--t-end", "0.05", "--set", "reduction.method=\"craig-bampton\"",
+            "--set", "reduction.modes=8", "--set", "output.modes=4")
+        with open(os.path.join(out, "output_modes.json")) as fj:
+            om = json.load(fj)
+        with open(os.path.join(out, "reduction.json")) as fj:
+            red = json.load(fj)
+        assert om["model"] == "reduced" and om["size"] == 10
+        rel = np.abs(np.array(om["frequencies_hz"]) / f_full[:4] - 1.0)
+        print(f"reduced (CB 8) against full frequencies: relative {rel.max():.2e}")
+        assert np.all(np.array(om["frequencies_hz"]) >= f_full[:4] * (1 - 1e-12))
+        assert rel.max() < 1e-4, rel
+        Mr, Kr = (np.load(os.path.join(out, f"reduced_{k}.npy")) for k in ("M", "K"))
+        written = np.load(os.path.join(out, "output_modes.npy"))
+        shapes_r, f_r = plane_modes(Mr, Kr)
+        np.testing.assert_allclose(om["frequencies_hz"], f_r[:4], rtol=1e-9, atol=0)
+        np.testing.assert_allclose(written, shapes_r[:, :4], rtol=0,
+                                   atol=1e-10 * np.abs(written).max())
+        check_modal_columns(out, red["coordinates"], Mr, written, 4)
+        # the torque-driven two-seal rotor
+        case2 = os.path.join(ROOT, "cases", "fe-two-seal.toml")
+        with open(case2, "rb") as f:
+            c2 = tomllib.load(f)
+        M2 = np.load(os.path.join(folder, c2["rotor"]["M"]))
+        names2 = [s.strip() for s in c2["rotor"]["coordinates"].split(",")]
+        out2 = os.path.join(tmp, "two")
+        run(case2, out2, "--t-end", "0.02", "--set", "output.modes=2")
+        header, _, _, _ = check_modal_columns(out2, names2, M2,
+                                              np.load(os.path.join(out2, "output_modes.npy")), 2)
+        # right after the coordinates' rates (t, N coordinates, N rates): no other observables
+        i = header.index("mode1")
+        assert i % 2 == 1 and header[(i - 1) // 2 + 1] == "v" + header[1]
+        assert header[i:i + 4] == ["mode1", "mode2", "vmode1", "vmode2"]
+
+
+@needs_cli
+def test_output_modes_bad_input_exits_2_naming_the_key():
+    # Each refusal exits 2 with output.modes and its rule in the message, and writes nothing:
+    # negative; more than the model's coordinates (52 full, 10 reduced); odd for an isotropic
+    # rotor; on a model that is not "matrices".
+    case = os.path.join(ROOT, "cases", "fe-runup.toml")
+    cb = ["--set", "reduction.method=\"craig-bampton\"", "--set", "reduction.modes=8"]
+    with tempfile.TemporaryDirectory() as tmp:
+        bad = os.path.join(tmp, "bad")
+        for sets, rule in ((["output.modes=-2"], "must be >= 0"),
+                           (["output.modes=54"], "at most n = 52"),
+                           (["output.modes=3"], "must be even"),
+                           (cb[1::2] + ["output.modes=12"], "at most n = 10")):
+            args = [a for s in sets for a in ("--set", s)]
+            p = subprocess.run([RUBDYN, "run", case, "--out", bad, *args],
+                               capture_output=True, text=True)
+            assert p.returncode == 2 and "output.modes" in p.stderr and rule in p.stderr, \
+                (sets, p.stderr)
+            assert "fe-runup.toml" in p.stderr or "--set" in p.stderr, p.stderr
+            assert not os.path.exists(bad)
+        p = subprocess.run([RUBDYN, "run", os.path.join(ROOT, "cases", "jeffcott.toml"), "--out",
+                            bad, "--set", "output.modes=2"], capture_output=True, text=True)
+        assert p.returncode == 2 and "output.modes" in p.stderr and "matrices" in p.stderr, \
+            p.stderr
+        assert not os.path.exists(bad)

@@ -12,6 +12,12 @@
 //   reduction.json    what was reduced: method, n -> m, the physical coordinates kept, the
 //                     reduced coordinates' names, the modes' frequencies and planes, the next
 //                     mode's frequency, and the one-line description of summary.json's "model"
+// and a matrices model's with output.modes = N > 0 (docs/fe-rotors.md, section 11):
+//   output_modes.npy  the shapes of the N modes whose amplitudes timeseries.csv's mode<k>,
+//                     vmode<k> are, n x N (n: the model integrated, the reduced one's m with
+//                     a [reduction]), mass-normalised
+//   output_modes.json their frequencies and planes, which model (full or reduced) and its size,
+//                     the coordinates the shapes' rows are, and the columns' definition
 // The .npy files are float64 little-endian, C order (io/matrix_files.hpp's npy_bytes).
 #include <string>
 
@@ -24,9 +30,16 @@ inline constexpr const char* kReductionFiles[] = {
     "reduced_M.npy",  "reduced_C.npy", "reduced_K.npy",     "reduced_G.npy",
     "reduced_f0.npy", "reduced_T.npy", "reduced_modes.npy", "reduction.json"};
 
+/// output_modes.npy and output_modes.json, relative to the output folder.
+inline constexpr const char* kOutputModesFiles[] = {"output_modes.npy", "output_modes.json"};
+
 /// Writes the files above for a reduced case into the folder open as dir_fd (`dir` its path, for
 /// messages); for any other case removes regular files of those names left by an earlier run
 /// (they would describe another model). Throws std::runtime_error when a write fails.
 void write_reduction_files(int dir_fd, const std::string& dir, const CaseSpec& spec);
+
+/// The same for kOutputModesFiles: written for a matrices case with output.modes > 0, else
+/// removed (left by an earlier run into the folder: they would describe columns not written).
+void write_output_modes_files(int dir_fd, const std::string& dir, const CaseSpec& spec);
 
 }  // namespace rubdyn

@@ -93,6 +93,9 @@ struct MatrixParams {
   /// replaces node, stator and contact. The unbalance sits at the first node.
   std::vector<MatrixNode> nodes;
   LoadParams loads;
+  /// output.modes: the number N of the rotor's lowest free modes whose amplitudes are the
+  /// model's observables (0: none; model/matrix_reduction.hpp's rotor_modes, of these matrices)
+  int output_modes = 0;
   /// The nodes the model has: `nodes`, or the one of node, stator, contact.
   std::vector<MatrixNode> node_list() const {
     if (!nodes.empty()) return nodes;
@@ -151,6 +154,12 @@ class MatrixModel final : public LagrangianModel {
   /// mass, damper and spring added on its node's (x, y) (none when a ring is rigid: it pins
   /// its node). `nodes`: the pairs (0, 1), (2, 3), ... of q, then the rings.
   std::optional<LinearModel> linearize(Linearization mode) const override;
+  /// With params().output_modes = N > 0: mode1..modeN, vmode1..vmodeN, the amplitudes
+  /// eta_k = phi_k^T M q of the rotor's N lowest free modes (rotor_modes) and their rates
+  /// phi_k^T M v, O(n N) per sample by the columns of M Phi computed once; else none.
+  const std::vector<Observable>& observables() const override { return observables_; }
+  void compute_observables(double t, VecIn q, VecIn v, VecIn a, const ContactForce* F,
+                           VecOut out) const override;
 
   /// The Schur complement Jp - b^T M^-1 b of theta at q (> 0 where M_full is positive definite).
   double schur(VecIn q) const;
@@ -245,6 +254,9 @@ class MatrixModel final : public LagrangianModel {
   std::vector<int> others_;
   Chart chart_;
   std::optional<RingChart> ring_chart_;  ///< every node's (x, y) and ring
+  /// M Phi of the output modes (n x N; empty without), and their observables
+  Mat Mphi_;
+  std::vector<Observable> observables_;
 };
 
 }  // namespace rubdyn

@@ -82,6 +82,28 @@ class ReductionRefused : public std::invalid_argument {
   std::string key_;
 };
 
+/// The lowest free modes of a matrices model's rotor (output.modes; docs/fe-rotors.md, section
+/// 11): K phi = w^2 M phi of its M and K (the undamped rotor at rest), mass-normalised
+/// (phi^T M phi = 1), lowest first, each with its largest entry positive (a deterministic sign).
+/// An isotropic rotor (isotropic_rotor) plane by plane, as the modal reduction computes them:
+/// each x-plane mode (of the even coordinates) gives the pair (x-plane, y-plane) of one frequency.
+struct RotorModes {
+  bool isotropic = false;
+  Mat shapes;                       ///< n x count
+  std::vector<double> f_hz;         ///< [Hz] (NaN of a negative eigenvalue: an indefinite K)
+  std::vector<std::string> planes;  ///< "x", "y" (isotropic) or ""
+};
+
+/// Whether p's rotor is isotropic as above: n even, M, C, K equal on the x (even) and y (odd)
+/// coordinates and without x-y terms (to 1e-12 of each matrix's largest entry), and every
+/// contact node's (x, y) = (2i, 2i + 1).
+bool isotropic_rotor(const MatrixParams& p);
+
+/// The `count` lowest free modes of p's rotor (0 <= count <= n, even when it is isotropic:
+/// RUBDYN_DEMAND; the case validation names output.modes). The modal reduction's free modes are
+/// these.
+RotorModes rotor_modes(const MatrixParams& p, int count);
+
 /// The reduced model of `full` (its matrices, names, nodes, loads) by `r` (method not None).
 /// Throws ReductionRefused for: no modes or cutoff, modes > the modes available (n for modal,
 /// n - 2K for Craig-Bampton), an odd number of modes of an isotropic rotor, a cutoff below the

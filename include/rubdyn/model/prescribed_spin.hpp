@@ -19,8 +19,9 @@
 //   tau_d = [M_f a_f]_theta - f_f,theta - sum_k (W_N,k,theta F_N,k + W_T,k,theta F_T,k),
 // the inner model being built without a drive torque. Its power tau_d omega is the drive's in the
 // energy balance (applied_power), and theta, omega, tau_d are the model's observables (output
-// columns theta, omega, drive_torque). The energies are the whole system's, the spin's kinetic
-// energy included.
+// columns theta, omega, drive_torque), then the inner model's own (a matrices model's modal
+// amplitudes, output.modes) at the full state. The energies are the whole system's, the spin's
+// kinetic energy included.
 // Every service of the inner model is passed through in the wrapper's coordinates: the planes'
 // centres (plane_motion: a rigid rotor's [[plane]] point interpolates between B and R) and the
 // ring chart (ring_chart: the inner chart with the spin's index dropped and theta(t) given, so
@@ -92,6 +93,8 @@ class PrescribedSpin final : public LagrangianModel {
   int n_;        // inner dofs - 1
   SpinLaw law_;  ///< theta(t), omega(t), alpha (the ring chart's too)
   std::vector<Coordinate> coords_;
+  /// theta, omega, drive_torque, then the inner model's observables
+  std::vector<Observable> observables_;
   /// The inner model's ring chart in these coordinates, with the prescription (none when the
   /// inner has none, or when a contact's point or ring involves the spin coordinate).
   std::optional<RingChart> ring_chart_;
