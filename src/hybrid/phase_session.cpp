@@ -319,11 +319,9 @@ void PhaseSession::free_jacobians(double t, const double* y, const Vec* a, bool 
     band_->detect(dfdv_);
   }
   band_->finish_pattern();
-  if (entries_ && !band_->banded() && n >= 16) {
+  if (entries_ && !band_->banded() && n >= kDenseKernelSize) {
     // S is factored densely (a reduced model's dense matrices): the lists into the dense blocks,
     // whose products are then a dense kernel's instead of one scattered update per entry
-    // (5x faster at n = 22; below 16 coordinates the lists are as fast, and the small models
-    // keep their bits)
     size_dense_blocks();
     for (auto [list, A] : {std::pair{&ne_.M, &M_}, {&ne_.dq, &dfdq_}, {&ne_.dv, &dfdv_}}) {
       A->setZero();

@@ -3,7 +3,6 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
-#include <utility>
 
 #include "rubdyn/model/jeffcott_model.hpp"
 #include "rubdyn/model/matrix_model.hpp"
@@ -101,21 +100,11 @@ std::unique_ptr<LagrangianModel> build_model(const CaseSpec& spec) {
   if (spec.loads().spin != SpinDrive::Prescribed) return e->build(spec);
   // a prescribed spin: the free-spin model without a drive torque, its spin coordinate made a
   // given function of time from the initial theta and omega0 (model/prescribed_spin.hpp)
-  const auto free_spin = [](LoadParams& l) {
-    l.spin = SpinDrive::Torque;
-    l.torque = 0.0;
-    l.torque_law = TorqueLaw::Constant;
-  };
-  std::unique_ptr<LagrangianModel> inner;
-  if (spec.model == "matrices") {  // (its parameters made once: no copy of the case's matrices)
-    MatrixParams p = matrix_model_params(spec);
-    free_spin(p.loads);
-    inner = std::make_unique<MatrixModel>(std::move(p));
-  } else {
-    CaseSpec free = spec;
-    free_spin(free.loads());
-    inner = e->build(free);
-  }
+  CaseSpec free = spec;
+  free.loads().spin = SpinDrive::Torque;
+  free.loads().torque = 0.0;
+  free.loads().torque_law = TorqueLaw::Constant;
+  std::unique_ptr<LagrangianModel> inner = e->build(free);
   const int s = inner->spin_coordinate();
   return std::make_unique<PrescribedSpin>(std::move(inner), spec.run.t_start, spec.initial.q0[s],
                                           spec.initial.v0[s], spec.loads().spin_accel);

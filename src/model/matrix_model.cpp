@@ -39,7 +39,7 @@ SpinScratch& spin_scratch(int n) {
 
 }  // namespace
 
-MatrixModel::Envelope::Envelope(const Mat& A) {
+MatrixModel::Envelope::Envelope(const Mat& A, bool dense_products) {
   const auto n = A.rows();
   lo.assign(static_cast<std::size_t>(n), 0);
   len.assign(static_cast<std::size_t>(n), 0);
@@ -63,7 +63,7 @@ MatrixModel::Envelope::Envelope(const Mat& A) {
     const auto k = static_cast<std::size_t>(i);
     for (Eigen::Index j = 0; j < len[k]; ++j) val[off[k] + j] = A(i, lo[k] + j);
   }
-  if (n >= kDenseRows && 2 * total >= n * A.cols()) dense = A;
+  if (dense_products && n >= kDenseKernelSize && 2 * total >= n * A.cols()) dense = A;
 }
 
 void MatrixModel::Envelope::multiply_add(double alpha, const double* x, double* y) const {
@@ -235,16 +235,13 @@ MatrixModel::MatrixModel(MatrixParams params)
   RUBDYN_DEMAND(llt.info() == Eigen::Success);
   // L's rows are read from the factor itself: the entries left of a row's first nonzero of M
   // are exact zeros of L (no fill outside the envelope), so this is M's envelope
-  Le_ = Envelope(Mat(llt.matrixL()));
+  Le_ = Envelope(Mat(llt.matrixL()), false);
   for (int i = 0; i < n_; ++i) {  // row i ends at its (positive) diagonal
     const auto k = static_cast<std::size_t>(i);
     RUBDYN_DEMAND(Le_.len[k] >= 1 && Le_.lo[k] + Le_.len[k] - 1 == i);
   }
-  if (Le_.dense.size() > 0) {  // (a dense M: its inverse, and L's dense copy is not kept)
-    Minv_ = llt.solve(Mat::Identity(n_, n_));
-    Le_.dense = Mat();
-  }
   Me_ = Envelope(r.M.transpose());  // (M's columns, as the products used before: M symmetric)
+  if (Me_.dense.size() > 0) Minv_ = llt.solve(Mat::Identity(n_, n_));
   Ce_ = Envelope(r.C);
   Ke_ = Envelope(r.K);
   Ge_ = Envelope(r.G);

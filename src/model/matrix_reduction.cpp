@@ -338,7 +338,10 @@ ReducedMatrices reduce_matrix_model(const MatrixParams& full, const ReductionPar
   std::vector<std::string> full_names = fr.names;
   if (static_cast<int>(full_names.size()) != n) {
     full_names.clear();
-    for (int i = 0; i < n; ++i) full_names.push_back("q" + std::to_string(i));
+    for (int i = 0; i < n; ++i) {
+      std::string name = "q";  // (appended, not "q" + string: g++ 12 warns falsely, -Wrestrict)
+      full_names.push_back(name.append(std::to_string(i)));
+    }
   }
   rr.names.clear();
   std::set<std::string> taken(full_names.begin(), full_names.end());
@@ -365,16 +368,10 @@ ReducedMatrices reduce_matrix_model(const MatrixParams& full, const ReductionPar
 
 MatrixParams ReducedMatrices::apply(const MatrixParams& full) const {
   RUBDYN_DEMAND(full.rotor.size() == full_size && node_xy.size() == full.node_list().size());
-  // full's every member but its rotor (whose n x n matrices a copy would only replace)
-  MatrixParams p;
-  p.node = full.node;
-  p.stator = full.stator;
-  p.contact = full.contact;
-  p.nodes = full.nodes;
-  p.loads = full.loads;
-  p.output_modes = full.output_modes;
+  MatrixParams p = full;
+  const double Jp = p.rotor.Jp;
   p.rotor = rotor;
-  p.rotor.Jp = full.rotor.Jp;
+  p.rotor.Jp = Jp;
   for (std::size_t k = 0; k < node_xy.size(); ++k) {
     MatrixContactNode& at = p.nodes.empty() ? p.node : p.nodes[k].at;
     at.x = node_xy[k].first;

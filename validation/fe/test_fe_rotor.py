@@ -445,6 +445,34 @@ def plane_modes(M, K):
     return shapes, f
 
 
+def case_rotor(case):
+    """A committed matrices case's M, K (from its files) and coordinate names."""
+    with open(case, "rb") as f:
+        c = tomllib.load(f)
+    folder = os.path.dirname(case)
+    M, K = (np.load(os.path.join(folder, c["rotor"][k])) for k in ("M", "K"))
+    return M, K, [s.strip() for s in c["rotor"]["coordinates"].split(",")]
+
+
+def check_modes_files(folder, M, K, count):
+    """output_modes.json's frequencies and output_modes.npy's shapes of a run against scipy's
+    (plane_modes of M, K): 1e-9 relative for the frequencies (two eigensolvers of a
+    symmetric-definite pencil agree to about eps times the spread of its eigenvalues, 1e-7 Hz^2 /
+    f^2 of the lowest: measured 1.5e-11), 1e-10 of the largest entry for the shapes
+    (eigenvectors are determined to eps ||A|| / gap, the first pairs' gaps are wide: measured
+    1e-12). Returns output_modes.json and the written shapes."""
+    import json
+    with open(os.path.join(folder, "output_modes.json")) as fj:
+        om = json.load(fj)
+    written = np.load(os.path.join(folder, "output_modes.npy"))
+    shapes, f = plane_modes(M, K)
+    assert om["count"] == count and written.shape == (M.shape[0], count)
+    np.testing.assert_allclose(om["frequencies_hz"], f[:count], rtol=1e-9, atol=0)
+    np.testing.assert_allclose(written, shapes[:, :count], rtol=0,
+                               atol=1e-10 * np.abs(shapes[:, :count]).max())
+    return om, written
+
+
 def read_columns(folder):
     """timeseries.csv's header and its rows as text (the bytes each column wrote)."""
     with open(os.path.join(folder, "timeseries.csv")) as f:
@@ -481,36 +509,21 @@ def check_modal_columns(folder, names, Mq, shapes, count):
 def test_output_modes_writes_the_rotors_modal_amplitudes():
     # cases/fe-runup.toml (52 coordinates, isotropic, prescribed spin) over 0.15 s (its first
     # impact at 0.10708 s, so the rub is in the run) with output.modes = 4: the files' frequencies
-    # are the planes' eigenvalues computed here with scipy (1e-9 relative: two eigensolvers of a
-    # symmetric-definite 26 x 26 pencil agree to about eps times the spread of its eigenvalues,
-    # 1e-7 Hz^2 / f^2 of the lowest: measured 1.5e-11 on the first four), the written shapes are
-    # scipy's (1e-10 of their largest entry: eigenvectors are determined to eps ||A|| / gap, the
-    # first pairs' gaps are wide; measured 1e-12), the columns are the written shapes' amplitudes
+    # and shapes are scipy's (check_modes_files), the columns are the written shapes' amplitudes
     # of the written coordinates (check_modal_columns) and scipy's shapes' to 1e-10 of the
     # largest sum of |terms| (measured 7e-13), and every column of the run without output.modes
     # is the same text with it: the modes are output only.
-    import json
     case = os.path.join(ROOT, "cases", "fe-runup.toml")
-    with open(case, "rb") as f:
-        c = tomllib.load(f)
-    folder = os.path.join(ROOT, "cases")
-    M, K = (np.load(os.path.join(folder, c["rotor"][k])) for k in ("M", "K"))
-    names = [s.strip() for s in c["rotor"]["coordinates"].split(",")]
-    shapes, f = plane_modes(M, K)
+    M, K, names = case_rotor(case)
+    shapes, _ = plane_modes(M, K)
     base = ["--t-end", "0.15", "--set", "output.coordinates=\"all\""]
     with tempfile.TemporaryDirectory() as tmp:
         plain, modal = os.path.join(tmp, "plain"), os.path.join(tmp, "modal")
         run(case, plain, *base)
         run(case, modal, *base, "--set", "output.modes=4")
-        with open(os.path.join(modal, "output_modes.json")) as fj:
-            om = json.load(fj)
-        assert om["model"] == "full" and om["size"] == 52 and om["count"] == 4
+        om, written = check_modes_files(modal, M, K, 4)
+        assert om["model"] == "full" and om["size"] == 52
         assert om["planes"] == ["x", "y", "x", "y"]
-        np.testing.assert_allclose(om["frequencies_hz"], f[:4], rtol=1e-9, atol=0)
-        written = np.load(os.path.join(modal, "output_modes.npy"))
-        assert written.shape == (52, 4)
-        np.testing.assert_allclose(written, shapes[:, :4], rtol=0,
-                                   atol=1e-10 * np.abs(shapes[:, :4]).max())
         header, rows, data, col = check_modal_columns(modal, names, M, written, 4)
         # against scipy's own shapes too
         for k in range(4):
@@ -548,22 +561,20 @@ def test_output_modes_of_a_reduced_and_of_a_torque_driven_rotor():
     # modes are the reduced rotor's (of its M_r, K_r: the files say "reduced", size 10), their
     # frequencies the full rotor's from above (Rayleigh-Ritz: a subspace's), within 1e-4 relative
     # (measured 2.2e-5: the static constraint modes carry the seal's flexibility), the reduced
-    # rotor's own modes are scipy's of reduced_M, reduced_K (as above), and the columns the written shapes' amplitudes of the reduced coordinates
-    # p with M_r. cases/fe-two-seal.toml (torque-driven: the columns come from the matrices model
-    # itself, no prescribed spin) with output.modes = 2 the same against its M.
+    # rotor's own modes are scipy's of reduced_M, reduced_K (check_modes_files), and the columns
+    # the written shapes' amplitudes of the reduced coordinates p with M_r.
+    # cases/fe-two-seal.toml (torque-driven: the columns come from the matrices model itself, no
+    # prescribed spin) with output.modes = 2 the same against its M.
     import json
     case = os.path.join(ROOT, "cases", "fe-runup.toml")
-    with open(case, "rb") as f:
-        c = tomllib.load(f)
-    folder = os.path.join(ROOT, "cases")
-    M, K = (np.load(os.path.join(folder, c["rotor"][k])) for k in ("M", "K"))
+    M, K, _ = case_rotor(case)
     _, f_full = plane_modes(M, K)
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "cb")
         run(case, out, "--t-end", "0.05", "--set", "reduction.method=\"craig-bampton\"",
             "--set", "reduction.modes=8", "--set", "output.modes=4")
-        with open(os.path.join(out, "output_modes.json")) as fj:
-            om = json.load(fj)
+        Mr, Kr = (np.load(os.path.join(out, f"reduced_{k}.npy")) for k in ("M", "K"))
+        om, written = check_modes_files(out, Mr, Kr, 4)
         with open(os.path.join(out, "reduction.json")) as fj:
             red = json.load(fj)
         assert om["model"] == "reduced" and om["size"] == 10
@@ -571,19 +582,10 @@ def test_output_modes_of_a_reduced_and_of_a_torque_driven_rotor():
         print(f"reduced (CB 8) against full frequencies: relative {rel.max():.2e}")
         assert np.all(np.array(om["frequencies_hz"]) >= f_full[:4] * (1 - 1e-12))
         assert rel.max() < 1e-4, rel
-        Mr, Kr = (np.load(os.path.join(out, f"reduced_{k}.npy")) for k in ("M", "K"))
-        written = np.load(os.path.join(out, "output_modes.npy"))
-        shapes_r, f_r = plane_modes(Mr, Kr)
-        np.testing.assert_allclose(om["frequencies_hz"], f_r[:4], rtol=1e-9, atol=0)
-        np.testing.assert_allclose(written, shapes_r[:, :4], rtol=0,
-                                   atol=1e-10 * np.abs(written).max())
         check_modal_columns(out, red["coordinates"], Mr, written, 4)
         # the torque-driven two-seal rotor
         case2 = os.path.join(ROOT, "cases", "fe-two-seal.toml")
-        with open(case2, "rb") as f:
-            c2 = tomllib.load(f)
-        M2 = np.load(os.path.join(folder, c2["rotor"]["M"]))
-        names2 = [s.strip() for s in c2["rotor"]["coordinates"].split(",")]
+        M2, _, names2 = case_rotor(case2)
         out2 = os.path.join(tmp, "two")
         run(case2, out2, "--t-end", "0.02", "--set", "output.modes=2")
         header, _, _, _ = check_modal_columns(out2, names2, M2,

@@ -191,13 +191,11 @@ class MatrixModel final : public LagrangianModel {
   struct Envelope {
     std::vector<Eigen::Index> lo, len, off;  ///< off: where row i starts in val
     Vec val;
-    /// The matrix itself where its envelope holds at least half of its entries and it has
-    /// kDenseRows rows or more (a reduced model's): its products by a dense kernel, 5-10x
-    /// faster there than row by row; else empty. (Below kDenseRows rows the loops are as fast,
-    /// and the small models keep their bits.)
+    /// The matrix itself where it has kDenseKernelSize rows or more and its envelope holds at
+    /// least half of its entries (a reduced model's), and `dense_products` asks for it: its
+    /// products by a dense kernel; else empty.
     Mat dense;
-    static constexpr Eigen::Index kDenseRows = 16;
-    explicit Envelope(const Mat& A = Mat());
+    explicit Envelope(const Mat& A = Mat(), bool dense_products = true);
     /// (row i) . x, x of the matrix's width (contiguous)
     double dot(int i, const double* x) const;
     /// y += alpha A x (x of the matrix's width, y of its height; contiguous, distinct); row by
@@ -241,7 +239,7 @@ class MatrixModel final : public LagrangianModel {
   /// M, C, K, G by rows (M's rows as its columns: M is symmetric) and the factor L of
   /// M = L L^T (row i: lo[i] .. i, the diagonal last)
   Envelope Me_, Ce_, Ke_, Ge_, Le_;
-  /// M^-1 where Le_ is dense (a reduced model's M): its solves one dense product (3x faster
+  /// M^-1 where M is dense (Me_.dense; a reduced model's): its solves one dense product (3x faster
   /// at n = 22 than the two triangular solves; forward error of order cond(M) u either way)
   Mat Minv_;
   /// M^-1 e_i of the contact nodes' (x, y) coordinates (column unit_pos_[i]; -1: none): a right
